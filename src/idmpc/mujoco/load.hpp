@@ -1,0 +1,42 @@
+#pragma once
+/// @file load.hpp
+/// @brief Loading MuJoCo models with MuJoCo's errors turned into C++ exceptions.
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace idmpc::mj {
+
+struct ModelDeleter {
+  void operator()(mjModel* m) const { mj_deleteModel(m); }
+};
+struct DataDeleter {
+  void operator()(mjData* d) const { mj_deleteData(d); }
+};
+using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
+using DataPtr = std::unique_ptr<mjData, DataDeleter>;
+
+/// @brief Installs handlers so that a MuJoCo error throws std::runtime_error (instead of
+/// exiting) and MuJoCo warnings are collected. Idempotent, thread-safe.
+void install_error_handlers();
+
+/// @brief Warnings MuJoCo raised through mju_warning since the last call (then cleared).
+std::vector<std::string> take_warnings();
+
+/// @brief Loads an MJCF or URDF file; throws std::runtime_error naming the file and MuJoCo's
+/// message if the file is missing or malformed.
+ModelPtr load_model(const std::string& path);
+
+/// @brief Loads a model from MJCF text (written to a temporary file); for tests.
+ModelPtr load_model_from_string(const std::string& xml);
+
+/// @brief Makes mjData for a model; throws on failure.
+DataPtr make_data(const mjModel* m);
+
+/// @brief Name of an object (joint, body, actuator, ...) or "#id" when it has none.
+std::string object_name(const mjModel* m, mjtObj type, int id);
+
+}  // namespace idmpc::mj

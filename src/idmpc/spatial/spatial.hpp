@@ -1,0 +1,206 @@
+#pragma once
+/// @file spatial.hpp
+/// @brief Spatial algebra (Featherstone 2008, ch. 2), angular-first: a motion is [ω; v], a
+/// force is [n; f], both expressed at the origin of the frame they are written in.
+///
+/// Fixed-size types only; no 6×6 products are formed by the algorithms that use these helpers.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace idmpc {
+
+template <typename S> using Vec3 = Eigen::Matrix<S, 3, 1>;
+template <typename S> using Mat3 = Eigen::Matrix<S, 3, 3>;
+template <typename S> using Vec6 = Eigen::Matrix<S, 6, 1>;
+template <typename S> using Mat6 = Eigen::Matrix<S, 6, 6>;
+template <typename S> using VecX = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+template <typename S> using MatX = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+
+/// @brief Skew-symmetric matrix [x]× with [x]× y = x × y.
+template <typename S> Mat3<S> skew(const Vec3<S>& x) {
+  Mat3<S> m;
+  m << S(0), -x.z(), x.y(), x.z(), S(0), -x.x(), -x.y(), x.x(), S(0);
+  return m;
+}
+
+/// @brief Motion cross product m1 × m2 (Featherstone eq. 2.31).
+template <typename S> Vec6<S> cross_motion(const Vec6<S>& m1, const Vec6<S>& m2) {
+  const auto w1 = m1.template head<3>(), v1 = m1.template tail<3>();
+  const auto w2 = m2.template head<3>(), v2 = m2.template tail<3>();
+  Vec6<S> r;
+  r.template head<3>() = w1.cross(w2);
+  r.template tail<3>() = w1.cross(v2) + v1.cross(w2);
+  return r;
+}
+
+/// @brief Force cross product m ×* f (Featherstone eq. 2.32).
+template <typename S> Vec6<S> cross_force(const Vec6<S>& m, const Vec6<S>& f) {
+  const auto w = m.template head<3>(), v = m.template tail<3>();
+  const auto n = f.template head<3>(), fl = f.template tail<3>();
+  Vec6<S> r;
+  r.template head<3>() = w.cross(n) + v.cross(fl);
+  r.template tail<3>() = w.cross(fl);
+  return r;
+}
+
+/// @brief 6×6 matrix of m× (motion cross operator).
+template <typename S> Mat6<S> cross_motion_matrix(const Vec6<S>& m) {
+  Mat6<S> X = Mat6<S>::Zero();
+  const Mat3<S> W = skew<S>(m.template head<3>());
+  X.template topLeftCorner<3, 3>() = W;
+  X.template bottomRightCorner<3, 3>() = W;
+  X.template bottomLeftCorner<3, 3>() = skew<S>(m.template tail<3>());
+  return X;
+}
+
+/// @brief 6×6 matrix of m×* (force cross operator) = −(m×)ᵀ.
+template <typename S> Mat6<S> cross_force_matrix(const Vec6<S>& m) {
+  Mat6<S> X = Mat6<S>::Zero();
+  const Mat3<S> W = skew<S>(m.template head<3>());
+  X.template topLeftCorner<3, 3>() = W;
+  X.template bottomRightCorner<3, 3>() = W;
+  X.template topRightCorner<3, 3>() = skew<S>(m.template tail<3>());
+  return X;
+}
+
+/// @brief 6×6 matrix B(f) with B(f) m = m ×* f, linear in the motion m.
+template <typename S> Mat6<S> cross_force_bar_matrix(const Vec6<S>& f) {
+  Mat6<S> X = Mat6<S>::Zero();
+  const Mat3<S> N = skew<S>(f.template head<3>());
+  const Mat3<S> F = skew<S>(f.template tail<3>());
+  X.template topLeftCorner<3, 3>() = -N;
+  X.template topRightCorner<3, 3>() = -F;
+  X.template bottomLeftCorner<3, 3>() = -F;
+  return X;
+}
+
+/// @brief Plücker transform ^B X_A from frame A to frame B, stored as (E, r): E rotates
+/// A-coordinates into B-coordinates and r is B's origin in A-coordinates.
+template <typename S> struct Transform {
+  Mat3<S> E = Mat3<S>::Identity();
+  Vec3<S> r = Vec3<S>::Zero();
+
+  static Transform identity() { return Transform{}; }
+
+  /// @brief X m: motion from A to B coordinates.
+  Vec6<S> apply_motion(const Vec6<S>& m) const {
+    Vec6<S> out;
+    const auto w = m.template head<3>();
+    out.template head<3>() = E * w;
+    out.template tail<3>() = E * (m.template tail<3>() - r.cross(w));
+    return out;
+  }
+  /// @brief X⁻¹ m: motion from B to A coordinates.
+  Vec6<S> apply_inverse_motion(const Vec6<S>& m) const {
+    Vec6<S> out;
+    const Vec3<S> w = E.transpose() * m.template head<3>();
+    out.template head<3>() = w;
+    out.template tail<3>() = E.transpose() * m.template tail<3>() + r.cross(w);
+    return out;
+  }
+  /// @brief X* f: force from A to B coordinates.
+  Vec6<S> apply_force(const Vec6<S>& f) const {
+    Vec6<S> out;
+    const auto fl = f.template tail<3>();
+    out.template head<3>() = E * (f.template head<3>() - r.cross(fl));
+    out.template tail<3>() = E * fl;
+    return out;
+  }
+  /// @brief Xᵀ f: force from B back to A coordinates (= (X*)⁻¹ f).
+  Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
+    Vec6<S> out;
+    const Vec3<S> fl = E.transpose() * f.template tail<3>();
+    out.template head<3>() = E.transpose() * f.template head<3>() + r.cross(fl);
+    out.template tail<3>() = fl;
+    return out;
+  }
+  /// @brief Composition (this ∘ other): first `other` (A→B), then this (B→C); gives A→C.
+  Transform operator*(const Transform& other) const {
+    Transform out;
+    out.E = E * other.E;
+    out.r = other.r + other.E.transpose() * r;
+    return out;
+  }
+  /// @brief Inverse transform (B→A).
+  Transform inverse() const {
+    Transform out;
+    out.E = E.transpose();
+    out.r = -(E * r);
+    return out;
+  }
+  /// @brief Dense 6×6 motion transform (for tests and reference code only).
+  Mat6<S> motion_matrix() const {
+    Mat6<S> X = Mat6<S>::Zero();
+    X.template topLeftCorner<3, 3>() = E;
+    X.template bottomRightCorner<3, 3>() = E;
+    X.template bottomLeftCorner<3, 3>() = -E * skew<S>(r);
+    return X;
+  }
+};
+
+/// @brief Spatial inertia of a rigid body about a frame origin: mass m, first moment
+/// h = m·c (c: centre of mass) and rotational inertia Ibar about the origin.
+template <typename S> struct Inertia {
+  S m = S(0);
+  Vec3<S> h = Vec3<S>::Zero();
+  Mat3<S> Ibar = Mat3<S>::Zero();
+
+  /// @brief From mass, centre of mass and rotational inertia about the centre of mass.
+  static Inertia from_com(S mass, const Vec3<S>& com, const Mat3<S>& I_com) {
+    Inertia out;
+    out.m = mass;
+    out.h = mass * com;
+    const Mat3<S> C = skew<S>(com);
+    out.Ibar = I_com - mass * C * C;
+    return out;
+  }
+  /// @brief I m (a force).
+  Vec6<S> apply(const Vec6<S>& mo) const {
+    const auto w = mo.template head<3>(), v = mo.template tail<3>();
+    Vec6<S> out;
+    out.template head<3>() = Ibar * w + h.cross(v);
+    out.template tail<3>() = m * v - h.cross(w);
+    return out;
+  }
+  Inertia& operator+=(const Inertia& o) {
+    m += o.m;
+    h += o.h;
+    Ibar += o.Ibar;
+    return *this;
+  }
+  /// @brief Re-express an inertia given in B-coordinates (X: A→B) in A-coordinates: Xᵀ I X.
+  Inertia transformed_to_parent(const Transform<S>& X) const {
+    Inertia out;
+    out.m = m;
+    const Vec3<S> y = X.E.transpose() * h;
+    out.h = y + m * X.r;
+    const Mat3<S> R = skew<S>(X.r), Y = skew<S>(y);
+    out.Ibar = X.E.transpose() * Ibar * X.E - Y * R - R * Y - m * R * R;
+    return out;
+  }
+  /// @brief Dense 6×6 matrix.
+  Mat6<S> matrix() const {
+    Mat6<S> M;
+    const Mat3<S> H = skew<S>(h);
+    M.template topLeftCorner<3, 3>() = Ibar;
+    M.template topRightCorner<3, 3>() = H;
+    M.template bottomLeftCorner<3, 3>() = -H;
+    M.template bottomRightCorner<3, 3>() = m * Mat3<S>::Identity();
+    return M;
+  }
+};
+
+/// @brief Rotation matrix of angle θ about the unit axis s (Rodrigues).
+template <typename S> Mat3<S> axis_rotation(const Vec3<S>& s, S theta) {
+  using std::cos;
+  using std::sin;
+  const S c = cos(theta), sn = sin(theta), t = S(1) - c;
+  Mat3<S> R;
+  R << t * s.x() * s.x() + c, t * s.x() * s.y() - sn * s.z(), t * s.x() * s.z() + sn * s.y(),
+      t * s.x() * s.y() + sn * s.z(), t * s.y() * s.y() + c, t * s.y() * s.z() - sn * s.x(),
+      t * s.x() * s.z() - sn * s.y(), t * s.y() * s.z() + sn * s.x(), t * s.z() * s.z() + c;
+  return R;
+}
+
+}  // namespace idmpc
