@@ -5,6 +5,8 @@
 ///
 /// Fixed-size types only; no 6×6 products are formed by the algorithms that use these helpers.
 
+#include <type_traits>
+
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
@@ -190,6 +192,40 @@ template <typename S> struct Inertia {
     return M;
   }
 };
+
+/// @brief Xᵀ·IA·X for a symmetric 6×6 inertia IA given in B-coordinates (X: A→B), computed
+/// with 3×3 blocks: the articulated inertia of a child expressed in its parent's frame.
+template <typename S> Mat6<S> congruence_to_parent(const Mat6<S>& IA, const Transform<S>& X) {
+  // rotate: blocks of diag(Eᵀ,Eᵀ)·IA·diag(E,E)
+  const Mat3<S> A = X.E.transpose() * IA.template topLeftCorner<3, 3>() * X.E;
+  const Mat3<S> B = X.E.transpose() * IA.template topRightCorner<3, 3>() * X.E;
+  const Mat3<S> C = X.E.transpose() * IA.template bottomRightCorner<3, 3>() * X.E;
+  // translate by r
+  const Mat3<S> R = skew<S>(X.r);
+  const Mat3<S> RC = R * C;
+  Mat6<S> out;
+  const Mat3<S> B2 = B + RC;
+  out.template topLeftCorner<3, 3>() = A - B * R + R * B.transpose() - RC * R;
+  out.template topRightCorner<3, 3>() = B2;
+  out.template bottomLeftCorner<3, 3>() = B2.transpose();
+  out.template bottomRightCorner<3, 3>() = C;
+  return out;
+}
+
+/// @brief A model inertia (double) in scalar type S; a reference when S is double.
+template <typename S>
+auto cast_inertia(const Inertia<double>& I)
+    -> std::conditional_t<std::is_same_v<S, double>, const Inertia<double>&, Inertia<S>> {
+  if constexpr (std::is_same_v<S, double>) {
+    return I;
+  } else {
+    Inertia<S> out;
+    out.m = S(I.m);
+    out.h = I.h.template cast<S>();
+    out.Ibar = I.Ibar.template cast<S>();
+    return out;
+  }
+}
 
 /// @brief Rotation matrix of angle θ about the unit axis s (Rodrigues).
 template <typename S> Mat3<S> axis_rotation(const Vec3<S>& s, S theta) {

@@ -1,0 +1,85 @@
+// idmpc check MODEL: summary of the imported model, then our dynamics against MuJoCo and our
+// derivatives against finite differences at random states.
+#include <cstdio>
+#include <iostream>
+#include <stdexcept>
+
+#include "app/commands.hpp"
+#include "idmpc/mujoco/check.hpp"
+#include "idmpc/mujoco/load.hpp"
+
+namespace idmpc::app {
+namespace {
+
+struct CheckOptions {
+  std::string model;
+  int samples = 20;
+  unsigned seed = 1;
+  bool direct_torque = false;
+};
+
+void print_summary(const mjModel* m, const mj::ImportedModel& imported) {
+  const Model& model = imported.model;
+  std::printf("model %s: %d dofs, %d bodies, gravity (%g, %g, %g)\n", model.name.c_str(), model.n,
+              m->nbody - 1, model.gravity.x(), model.gravity.y(), model.gravity.z());
+  for (int i = 0; i < model.n; ++i) {
+    const Vec3<double>& s = model.axis[i];
+    std::printf("  %2d %-16s %-6s axis (%+.3f %+.3f %+.3f)  parent %2d  mass %.4g%s\n", i,
+                model.joint_names[i].c_str(),
+                model.joint_type[i] == JointType::kRevolute ? "hinge" : "slide", s.x(), s.y(),
+                s.z(), model.parent[i], model.I[i].m,
+                model.armature[i] || model.damping[i] || model.stiffness[i] ? "  (passive/armature)" : "");
+  }
+  std::printf("actuation: %s\n", imported.actuation.direct
+                                     ? "joint torques applied directly (qfrc_applied)"
+                                     : "one motor actuator per joint");
+  if (imported.unmodeled.empty()) {
+    std::printf("unmodeled by the controller: nothing\n");
+  } else {
+    std::printf("unmodeled by the controller (the plant still has them):\n");
+    for (const auto& u : imported.unmodeled) std::printf("  - %s\n", u.c_str());
+  }
+}
+
+void run(const CheckOptions& opt) {
+  if (opt.samples < 1) {
+    throw std::invalid_argument("--samples must be at least 1, got " + std::to_string(opt.samples));
+  }
+  const mj::ModelPtr m = mj::load_model(opt.model);
+  const mj::ImportedModel imported =
+      mj::import_model(m.get(), opt.model, mj::ImportOptions{opt.direct_torque});
+  print_summary(m.get(), imported);
+  const auto entries = mj::check_model(m.get(), imported.model, opt.samples, opt.seed);
+  std::printf("\n%-48s %12s %10s\n", "check (worst relative error)", "error", "tolerance");
+  int failed = 0;
+  for (const auto& e : entries) {
+    std::printf("%-48s %12.3e %10.0e  %s\n", e.quantity.c_str(), e.worst, e.tolerance,
+                e.ok() ? "ok" : "FAIL");
+    failed += !e.ok();
+  }
+  const auto warnings = mj::take_warnings();
+  for (const auto& w : warnings) std::printf("MuJoCo warning: %s\n", w.c_str());
+  std::fflush(stdout);
+  if (failed) {
+    throw std::runtime_error(std::to_string(failed) + " check(s) exceed their tolerance on '" +
+                             opt.model + "'");
+  }
+  std::printf("all %zu checks passed at %d random states (seed %u)\n", entries.size(),
+              opt.samples, opt.seed);
+}
+
+}  // namespace
+
+void register_check(CLI::App& app) {
+  auto opt = std::make_shared<CheckOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "check", "Compare our ID, FD, M with MuJoCo and our derivatives with finite differences");
+  sub->add_option("model", opt->model, "MJCF/URDF model file")->required();
+  sub->add_option("--samples", opt->samples, "number of random states")->capture_default_str();
+  sub->add_option("--seed", opt->seed, "random seed")->capture_default_str();
+  sub->add_flag("--direct-torque", opt->direct_torque,
+                "ignore the model's actuators and apply joint torques directly");
+  sub->callback([opt] { run(*opt); });
+}
+
+}  // namespace idmpc::app

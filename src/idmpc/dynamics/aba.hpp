@@ -1,0 +1,79 @@
+#pragma once
+/// @file aba.hpp
+/// @brief Articulated-body algorithm (Featherstone 2008, Table 7.1) with armature and passive
+/// forces: FD(q, v, τ) = M⁻¹(τ − c + passive) (DESIGN §2), and M⁻¹x reusing its factorization.
+
+#include "idmpc/model/data.hpp"
+#include "idmpc/model/joint.hpp"
+
+namespace idmpc {
+
+/// @brief Forward dynamics q̈ = FD(q, v, τ); q, v, τ of size n. Returns data.qdd and leaves
+/// the articulated inertias (data.IA, U, D) for minv_apply.
+template <typename S, typename Q, typename Vv, typename T>
+const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                   const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
+  const int n = model.n;
+  // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
+  for (int i = 0; i < n; ++i) {
+    const int p = model.parent[i];
+    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    data.vJ[i] = model.S[i].template cast<S>() * v[i];
+    data.V[i] = p < 0 ? data.vJ[i] : Vec6<S>(data.X_up[i].apply_motion(data.V[p]) + data.vJ[i]);
+    data.c[i] = cross_motion<S>(data.V[i], data.vJ[i]);
+    const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
+    data.IA[i] = Ii.matrix();
+    data.pA[i] = cross_force<S>(data.V[i], Ii.apply(data.V[i]));
+  }
+  // pass 2: articulated inertias and bias forces, leaves first
+  for (int i = n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    const Vec6<S> Si = model.S[i].template cast<S>();
+    data.U[i] = data.IA[i] * Si;
+    data.D[i] = Si.dot(data.U[i]) + model.armature[i];
+    data.u[i] = tau[i] - Si.dot(data.pA[i]) - model.damping[i] * v[i] -
+                model.stiffness[i] * (q[i] - model.q_spring[i]);
+    if (p >= 0) {
+      const Mat6<S> Ia = data.IA[i] - data.U[i] * data.U[i].transpose() / data.D[i];
+      const Vec6<S> pa = data.pA[i] + Ia * data.c[i] + data.U[i] * (data.u[i] / data.D[i]);
+      data.IA[p] += congruence_to_parent<S>(Ia, data.X_up[i]);
+      data.pA[p] += data.X_up[i].apply_transpose_force(pa);
+    }
+  }
+  // pass 3: accelerations, root first
+  const Vec6<S> a0 = base_acceleration<S>(model);
+  for (int i = 0; i < n; ++i) {
+    const int p = model.parent[i];
+    const Vec6<S> ap = data.X_up[i].apply_motion(p < 0 ? a0 : data.A[p]) + data.c[i];
+    data.qdd[i] = (data.u[i] - data.U[i].dot(ap)) / data.D[i];
+    data.A[i] = ap + model.S[i].template cast<S>() * data.qdd[i];
+  }
+  return data.qdd;
+}
+
+/// @brief y = M(q)⁻¹x in O(n), reusing the articulated inertias of the last aba(q, ·, ·) call
+/// (an ABA sweep with zero velocity and gravity). Returns data.Minv_x.
+template <typename S, typename Xx>
+const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
+  const int n = model.n;
+  for (int i = 0; i < n; ++i) data.pz[i].setZero();
+  // backward: articulated bias forces of the load x
+  for (int i = n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    data.Minv_x[i] = x[i] - model.S[i].template cast<S>().dot(data.pz[i]);
+    if (p >= 0) {
+      data.pz[p] += data.X_up[i].apply_transpose_force(
+          Vec6<S>(data.pz[i] + data.U[i] * (data.Minv_x[i] / data.D[i])));
+    }
+  }
+  // forward: accelerations
+  for (int i = 0; i < n; ++i) {
+    const int p = model.parent[i];
+    const Vec6<S> ap = p < 0 ? Vec6<S>::Zero() : data.X_up[i].apply_motion(data.az[p]);
+    data.Minv_x[i] = (data.Minv_x[i] - data.U[i].dot(ap)) / data.D[i];
+    data.az[i] = ap + model.S[i].template cast<S>() * data.Minv_x[i];
+  }
+  return data.Minv_x;
+}
+
+}  // namespace idmpc

@@ -1,0 +1,45 @@
+#pragma once
+/// @file rnea.hpp
+/// @brief Recursive Newton–Euler algorithm (Featherstone 2008, Table 5.1) with armature and
+/// passive joint forces: ID(q, v, a) = M a + c(q, v) − passive(q, v) (DESIGN §2).
+
+#include "idmpc/model/data.hpp"
+#include "idmpc/model/joint.hpp"
+
+namespace idmpc {
+
+/// @brief Inverse dynamics τ = ID(q, v, a); q, v, a of size n. Fills data.X_up, V, A, h, vJ
+/// and the subtree forces F (used by rnea_vjp). Returns data.tau.
+template <typename S, typename Q, typename Vv, typename Aa>
+const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  const Vec6<S> a0 = base_acceleration<S>(model);
+  // forward pass: link velocities, accelerations and body forces
+  for (int i = 0; i < model.n; ++i) {
+    const int p = model.parent[i];
+    const Vec6<S> Si = model.S[i].template cast<S>();
+    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    data.vJ[i] = Si * v[i];
+    if (p < 0) {
+      data.V[i] = data.vJ[i];
+      data.A[i] = data.X_up[i].apply_motion(a0) + Si * a[i];
+    } else {
+      data.V[i] = data.X_up[i].apply_motion(data.V[p]) + data.vJ[i];
+      data.A[i] = data.X_up[i].apply_motion(data.A[p]) + Si * a[i] +
+                  cross_motion<S>(data.V[i], data.vJ[i]);
+    }
+    const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
+    data.h[i] = Ii.apply(data.V[i]);
+    data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
+  }
+  // backward pass: joint torques, subtree forces, armature and passive forces
+  for (int i = model.n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    data.tau[i] = model.S[i].template cast<S>().dot(data.F[i]) + model.armature[i] * a[i] +
+                  model.damping[i] * v[i] + model.stiffness[i] * (q[i] - model.q_spring[i]);
+    if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
+  }
+  return data.tau;
+}
+
+}  // namespace idmpc

@@ -1,0 +1,87 @@
+#pragma once
+/// @file rnea_derivatives.hpp
+/// @brief Analytic partial derivatives of RNEA (in the spirit of Carpentier & Mansard, RSS 2018):
+/// ∂τ/∂q, ∂τ/∂v and ∂τ/∂a = M, from world-frame quantities in O(n·depth).
+///
+/// With world-frame joint axes S_j, velocities v, accelerations a (base: −g), composite
+/// inertias Ic_i, subtree forces F_i and composite "Coriolis" matrices
+/// Bc_i = Σ_{k∈sub(i)} (−I_k [v_k]× + [v_k]×* I_k + [h_k]‾), h_k = I_k v_k,
+/// and per joint w_j = S_j × v_λ(j), ψ_j = S_j × a_λ(j) − w_j × v_λ(j):
+///   j ancestor of i (or i):  ∂τ_i/∂q_j = −(Ic_i S_i)·ψ_j − (Bc_iᵀ S_i)·w_j
+///                            ∂τ_i/∂v_j = (Bc_iᵀ S_i)·S_j − 2 (Ic_i S_i)·w_j
+///   j descendant of i:       ∂τ_i/∂q_j = S_i·(−Ic_j ψ_j − Bc_j w_j + S_j ×* F_j)
+///                            ∂τ_i/∂v_j = S_i·(Bc_j S_j − 2 Ic_j w_j)
+/// plus stiffness, damping and armature on the diagonals.
+
+#include "idmpc/model/data.hpp"
+#include "idmpc/model/joint.hpp"
+
+namespace idmpc {
+
+/// @brief Fills data.dtau_dq, data.dtau_dv, data.M (= ∂τ/∂a) and data.tau at (q, v, a).
+template <typename S, typename Q, typename Vv, typename Aa>
+void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                      const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  const int n = model.n;
+  const Vec6<S> a0 = base_acceleration<S>(model);
+  // forward pass in the world frame: placements, axes, velocities, accelerations, forces
+  for (int i = 0; i < n; ++i) {
+    const int p = model.parent[i];
+    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    data.oX[i] = p < 0 ? data.X_up[i] : data.X_up[i] * data.oX[p];
+    data.oS[i] = data.oX[i].apply_inverse_motion(model.S[i].template cast<S>());
+    const Vec6<S> vJ = data.oS[i] * v[i];
+    data.oV[i] = p < 0 ? vJ : Vec6<S>(data.oV[p] + vJ);
+    data.oA[i] = (p < 0 ? a0 : data.oA[p]) + data.oS[i] * a[i] + cross_motion<S>(data.oV[i], vJ);
+    data.oI[i] = cast_inertia<S>(model.I[i]).transformed_to_parent(data.oX[i]);
+    const Vec6<S> h = data.oI[i].apply(data.oV[i]);
+    data.oF[i] = data.oI[i].apply(data.oA[i]) + cross_force<S>(data.oV[i], h);
+    const Mat6<S> I6 = data.oI[i].matrix();
+    data.oB[i] = cross_force_matrix<S>(data.oV[i]) * I6 - I6 * cross_motion_matrix<S>(data.oV[i]) +
+                 cross_force_bar_matrix<S>(h);
+  }
+  // backward pass: composite inertias, Coriolis matrices and subtree forces
+  for (int i = n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    if (p >= 0) {
+      data.oI[p] += data.oI[i];
+      data.oB[p] += data.oB[i];
+      data.oF[p] += data.oF[i];
+    }
+  }
+  // per joint: the vectors the pairwise products need
+  for (int j = 0; j < n; ++j) {
+    const int p = model.parent[j];
+    const Vec6<S>& Sj = data.oS[j];
+    const Vec6<S> vp = p < 0 ? Vec6<S>::Zero() : data.oV[p];
+    const Vec6<S>& ap = p < 0 ? a0 : data.oA[p];
+    data.w[j] = cross_motion<S>(Sj, vp);
+    data.psi[j] = cross_motion<S>(Sj, ap) - cross_motion<S>(data.w[j], vp);
+    data.IcS[j] = data.oI[j].apply(Sj);
+    data.BcS[j].noalias() = data.oB[j].transpose() * Sj;
+    data.G[j] = -data.oI[j].apply(data.psi[j]) - data.oB[j] * data.w[j] +
+                cross_force<S>(Sj, data.oF[j]);
+    data.H[j] = data.oB[j] * Sj - S(2) * data.oI[j].apply(data.w[j]);
+    data.tau[j] = Sj.dot(data.oF[j]) + model.armature[j] * a[j] + model.damping[j] * v[j] +
+                  model.stiffness[j] * (q[j] - model.q_spring[j]);
+  }
+  // pairs (i, j) with j an ancestor of i or i itself, and their transposed places
+  data.dtau_dq.setZero();
+  data.dtau_dv.setZero();
+  for (int i = 0; i < n; ++i) {
+    for (int j = i; j >= 0; j = model.parent[j]) {
+      data.dtau_dq(i, j) = -data.IcS[i].dot(data.psi[j]) - data.BcS[i].dot(data.w[j]);
+      data.dtau_dv(i, j) = data.BcS[i].dot(data.oS[j]) - S(2) * data.IcS[i].dot(data.w[j]);
+      data.M(i, j) = data.M(j, i) = data.IcS[i].dot(data.oS[j]);
+      if (j != i) {
+        data.dtau_dq(j, i) = data.oS[j].dot(data.G[i]);
+        data.dtau_dv(j, i) = data.oS[j].dot(data.H[i]);
+      }
+    }
+    data.dtau_dq(i, i) += model.stiffness[i];
+    data.dtau_dv(i, i) += model.damping[i];
+    data.M(i, i) += model.armature[i];
+  }
+}
+
+}  // namespace idmpc

@@ -1,0 +1,189 @@
+#include "idmpc/mujoco/import.hpp"
+
+#include <sstream>
+#include <stdexcept>
+
+#include "idmpc/mujoco/load.hpp"
+
+namespace idmpc::mj {
+namespace {
+
+Vec3<double> vec3(const mjtNum* x) { return Vec3<double>(x[0], x[1], x[2]); }
+
+Mat3<double> rotation(const mjtNum* quat) {
+  return Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]).normalized().toRotationMatrix();
+}
+
+Transform<double> translation(const Vec3<double>& r) {
+  Transform<double> X;
+  X.r = r;
+  return X;
+}
+
+// body inertia from mass, centre of mass, principal-axes frame and principal moments
+Inertia<double> body_inertia(const mjModel* m, int b) {
+  const Mat3<double> R = rotation(m->body_iquat + 4 * b);
+  const Mat3<double> I_com = R * vec3(m->body_inertia + 3 * b).asDiagonal() * R.transpose();
+  return Inertia<double>::from_com(m->body_mass[b], vec3(m->body_ipos + 3 * b), I_com);
+}
+
+std::string joint_label(const mjModel* m, int j) {
+  return "joint '" + object_name(m, mjOBJ_JOINT, j) + "' of body '" +
+         object_name(m, mjOBJ_BODY, m->jnt_bodyid[j]) + "'";
+}
+
+Actuation import_actuation(const mjModel* m, const std::string& source, const ImportOptions& options) {
+  Actuation act;
+  if (options.direct_torque || m->nu == 0) return act;
+  act.direct = false;
+  act.actuator_of_dof.assign(m->nv, -1);
+  act.ctrl_per_torque.assign(m->nv, 0.0);
+  for (int u = 0; u < m->nu; ++u) {
+    const std::string name = "actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'";
+    const std::string hint = " in '" + source +
+                             "': only motor actuators on joints are supported (or use the "
+                             "option that applies torques directly)";
+    if (m->actuator_trntype[u] != mjTRN_JOINT) {
+      throw std::invalid_argument(name + " does not act on a joint" + hint);
+    }
+    const bool motor = m->actuator_dyntype[u] == mjDYN_NONE &&
+                       m->actuator_gaintype[u] == mjGAIN_FIXED &&
+                       m->actuator_biastype[u] == mjBIAS_NONE;
+    if (!motor) {
+      throw std::invalid_argument(name + " is not a motor (it has activation dynamics, a "
+                                         "non-fixed gain or a bias such as a position servo)" +
+                                  hint);
+    }
+    const double gain = m->actuator_gainprm[u * mjNGAIN] * m->actuator_gear[6 * u];
+    const int dof = m->jnt_dofadr[m->actuator_trnid[2 * u]];
+    if (gain == 0) throw std::invalid_argument(name + " has zero gain×gear in '" + source + "'");
+    if (act.actuator_of_dof[dof] >= 0) {
+      throw std::invalid_argument(name + " drives " +
+                                  joint_label(m, m->actuator_trnid[2 * u]) +
+                                  " which already has an actuator in '" + source +
+                                  "': expected exactly one motor per joint");
+    }
+    act.actuator_of_dof[dof] = u;
+    act.ctrl_per_torque[dof] = 1.0 / gain;
+  }
+  for (int i = 0; i < m->nv; ++i) {
+    if (act.actuator_of_dof[i] < 0) {
+      throw std::invalid_argument("model '" + source + "' is under-actuated: " +
+                                  joint_label(m, m->dof_jntid[i]) +
+                                  " has no motor actuator (expected one motor per joint, or no "
+                                  "actuators at all, or the option that applies torques directly)");
+    }
+  }
+  return act;
+}
+
+std::vector<std::string> unmodeled_features(const mjModel* m, const Actuation& act) {
+  std::vector<std::string> out;
+  const bool contacts_on = !(m->opt.disableflags & (mjDSBL_CONTACT | mjDSBL_CONSTRAINT));
+  int colliding = 0;
+  for (int g = 0; g < m->ngeom; ++g) colliding += (m->geom_contype[g] || m->geom_conaffinity[g]);
+  if (contacts_on && colliding > 1) {
+    out.push_back("contacts (" + std::to_string(colliding) + " colliding geoms)");
+  }
+  for (int j = 0; j < m->njnt; ++j) {
+    if (m->jnt_limited[j]) out.push_back("limit on " + joint_label(m, j));
+  }
+  for (int i = 0; i < m->nv; ++i) {
+    if (m->dof_frictionloss[i] > 0) out.push_back("friction loss on " + joint_label(m, m->dof_jntid[i]));
+  }
+  if (m->ntendon > 0) out.push_back(std::to_string(m->ntendon) + " tendon(s)");
+  if (m->neq > 0) out.push_back(std::to_string(m->neq) + " equality constraint(s)");
+  if (m->opt.density > 0 || m->opt.viscosity > 0) out.push_back("fluid forces (density/viscosity)");
+  if (!act.direct) {
+    for (int u = 0; u < m->nu; ++u) {
+      if (m->actuator_ctrllimited[u]) {
+        out.push_back("control range of actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'");
+      }
+      if (m->actuator_forcelimited[u]) {
+        out.push_back("force range of actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'");
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+ImportedModel import_model(const mjModel* m, const std::string& source, const ImportOptions& options) {
+  // joints: hinge and slide only, each one dof
+  for (int j = 0; j < m->njnt; ++j) {
+    const int type = m->jnt_type[j];
+    if (type == mjJNT_BALL || type == mjJNT_FREE) {
+      throw std::invalid_argument(joint_label(m, j) + " in '" + source + "' is a " +
+                                  (type == mjJNT_BALL ? "ball" : "free") +
+                                  " joint: only hinge and slide joints are supported");
+    }
+  }
+  if (m->nv == 0) throw std::invalid_argument("model '" + source + "' has no joints");
+  if (m->nq != m->nv) {
+    throw std::invalid_argument("model '" + source + "' has nq = " + std::to_string(m->nq) +
+                                " but nv = " + std::to_string(m->nv) + ": expected 1-DoF joints");
+  }
+
+  ImportedModel out;
+  Model& model = out.model;
+  model.name = source;
+  const int n = m->nv;
+  model.n = n;
+  model.q_ref.resize(n);
+  model.armature.resize(n);
+  model.damping.resize(n);
+  model.stiffness.resize(n);
+  model.q_spring.resize(n);
+
+  // per body: the link its frame is rigidly attached to and that link's frame → body frame
+  std::vector<int> link_of_body(m->nbody, -1);
+  std::vector<Transform<double>> body_in_link(m->nbody);
+  const bool passive = !(m->opt.disableflags & mjDSBL_PASSIVE);
+  for (int b = 1; b < m->nbody; ++b) {
+    const int pb = m->body_parentid[b];
+    // body placement in its parent's frame: coordinates map by Rᵀ, origin at body_pos
+    Transform<double> T_body;
+    T_body.E = rotation(m->body_quat + 4 * b).transpose();
+    T_body.r = vec3(m->body_pos + 3 * b);
+    Transform<double> pre = T_body * body_in_link[pb];
+    int link = link_of_body[pb];
+    Vec3<double> prev_anchor = Vec3<double>::Zero();
+    for (int k = 0; k < m->body_jntnum[b]; ++k) {
+      const int j = m->body_jntadr[b] + k;
+      const int i = m->jnt_dofadr[j];
+      if (i != static_cast<int>(model.parent.size())) {
+        throw std::invalid_argument("model '" + source + "': dofs are not in body order at " +
+                                    joint_label(m, j));
+      }
+      // link frame: the body frame moved to the joint anchor; joints of one body compose
+      const Vec3<double> anchor = vec3(m->jnt_pos + 3 * j);
+      model.X_tree.push_back(k == 0 ? translation(anchor) * pre : translation(anchor - prev_anchor));
+      model.parent.push_back(link);
+      model.joint_type.push_back(m->jnt_type[j] == mjJNT_HINGE ? JointType::kRevolute
+                                                               : JointType::kPrismatic);
+      model.axis.push_back(vec3(m->jnt_axis + 3 * j).normalized());
+      model.I.emplace_back();
+      model.joint_names.push_back(object_name(m, mjOBJ_JOINT, j));
+      model.q_ref[i] = m->qpos0[m->jnt_qposadr[j]];
+      model.armature[i] = m->dof_armature[i];
+      model.damping[i] = passive ? m->dof_damping[i] : 0.0;
+      model.stiffness[i] = passive ? m->jnt_stiffness[j] : 0.0;
+      model.q_spring[i] = m->qpos_spring[m->jnt_qposadr[j]];
+      link = i;
+      prev_anchor = anchor;
+    }
+    link_of_body[b] = link;
+    body_in_link[b] = m->body_jntnum[b] > 0 ? translation(-prev_anchor) : pre;
+    // welded bodies merge into the link they hang from; those on the base carry nothing
+    if (link >= 0) model.I[link] += body_inertia(m, b).transformed_to_parent(body_in_link[b]);
+  }
+  model.gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
+                                                         : vec3(m->opt.gravity);
+  model.finalize();
+  out.actuation = import_actuation(m, source, options);
+  out.unmodeled = unmodeled_features(m, out.actuation);
+  return out;
+}
+
+}  // namespace idmpc::mj

@@ -1,0 +1,39 @@
+#pragma once
+/// @file import.hpp
+/// @brief mjModel → Model, following DESIGN §3 exactly, plus how torques reach the plant.
+
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "idmpc/model/model.hpp"
+
+namespace idmpc::mj {
+
+struct ImportOptions {
+  /// Ignore the model's own actuators (whatever their kind) and apply joint torques directly
+  /// through qfrc_applied, e.g. for servo-actuated robot files.
+  bool direct_torque = false;
+};
+
+/// @brief How a joint torque vector τ reaches the plant.
+struct Actuation {
+  bool direct = true;                ///< τ → qfrc_applied (actuation disabled)
+  std::vector<int> actuator_of_dof;  ///< else ctrl[actuator_of_dof[i]] = τ_i · ctrl_per_torque[i]
+  std::vector<double> ctrl_per_torque;
+};
+
+struct ImportedModel {
+  Model model;
+  Actuation actuation;
+  std::vector<std::string> unmodeled;  ///< plant features the controller's model ignores
+};
+
+/// @brief Builds the controller's Model from a MuJoCo model. Throws std::invalid_argument
+/// naming the element for anything unsupported (ball/free joints, non-motor actuators,
+/// under-actuation). `source` names the file in messages.
+ImportedModel import_model(const mjModel* m, const std::string& source,
+                           const ImportOptions& options = {});
+
+}  // namespace idmpc::mj

@@ -1,0 +1,313 @@
+#include "idmpc/render/video_writer.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+extern char** environ;
+
+namespace idmpc::render {
+namespace {
+
+constexpr std::size_t kStderrTailChars = 1500;  // enough for ffmpeg's last few error lines
+
+std::string errno_text(int err) { return std::strerror(err); }
+
+// the last lines of a text file, trimmed to at most kStderrTailChars
+std::string file_tail(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "";
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string text = ss.str();
+  while (!text.empty() && (text.back() == '\n' || text.back() == '\r' || text.back() == ' ')) {
+    text.pop_back();
+  }
+  if (text.size() > kStderrTailChars) {
+    text = text.substr(text.size() - kStderrTailChars);
+    const auto nl = text.find('\n');
+    if (nl != std::string::npos) text = text.substr(nl + 1);
+    text = "..." + text;
+  }
+  return text;
+}
+
+std::string describe_status(int status) {
+  if (WIFEXITED(status)) return "exit status " + std::to_string(WEXITSTATUS(status));
+  if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
+  return "wait status " + std::to_string(status);
+}
+
+// writes all bytes to a pipe; false (errno set) if the reader is gone or another error occurs.
+// SIGPIPE is blocked for the write and a SIGPIPE it raised is consumed, so a dead ffmpeg is an
+// error instead of killing the process
+bool write_all(int fd, const unsigned char* data, std::size_t size) {
+  sigset_t pipe_set;
+  sigset_t old_set;
+  sigemptyset(&pipe_set);
+  sigaddset(&pipe_set, SIGPIPE);
+  pthread_sigmask(SIG_BLOCK, &pipe_set, &old_set);
+  sigset_t pending;
+  sigpending(&pending);
+  const bool was_pending = sigismember(&pending, SIGPIPE) == 1;
+
+  bool ok = true;
+  int saved_errno = 0;
+  while (size > 0) {
+    const ssize_t n = ::write(fd, data, size);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      ok = false;
+      saved_errno = errno;
+      break;
+    }
+    data += n;
+    size -= static_cast<std::size_t>(n);
+  }
+  if (!ok && saved_errno == EPIPE && !was_pending) {
+    const timespec zero{0, 0};
+    while (sigtimedwait(&pipe_set, nullptr, &zero) == -1 && errno == EINTR) {
+    }
+  }
+  pthread_sigmask(SIG_SETMASK, &old_set, nullptr);
+  errno = saved_errno;
+  return ok;
+}
+
+std::string format_fps(double fps) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.9g", fps);
+  return text;
+}
+
+}  // namespace
+
+std::string find_on_path(const std::string& name) {
+  if (name.find('/') != std::string::npos) {
+    return access(name.c_str(), X_OK) == 0 ? name : "";
+  }
+  const char* path = std::getenv("PATH");
+  std::stringstream dirs(path ? path : "/usr/local/bin:/usr/bin:/bin");
+  std::string dir;
+  while (std::getline(dirs, dir, ':')) {
+    const std::string candidate = (dir.empty() ? std::string(".") : dir) + "/" + name;
+    struct stat st {};
+    if (stat(candidate.c_str(), &st) == 0 && S_ISREG(st.st_mode) &&
+        access(candidate.c_str(), X_OK) == 0) {
+      return candidate;
+    }
+  }
+  return "";
+}
+
+void check_output_writable(const std::string& path) {
+  namespace fs = std::filesystem;
+  if (path.empty()) throw std::invalid_argument("output path: expected a file name, got ''");
+  const fs::path out(path);
+  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  const std::string head = "cannot write '" + path + "': ";
+  std::error_code ec;
+  if (!fs::exists(dir, ec)) {
+    throw std::runtime_error(head + "directory '" + dir.string() + "' does not exist");
+  }
+  if (!fs::is_directory(dir, ec)) {
+    throw std::runtime_error(head + "'" + dir.string() + "' is not a directory");
+  }
+  if (fs::is_directory(out, ec)) {
+    throw std::runtime_error(head + "expected a file name, got a directory");
+  }
+
+  // the only reliable test (root, read-only mounts, /proc) is to create a file there
+  std::string probe = (dir / ".idmpc-write-test-XXXXXX").string();
+  std::vector<char> name(probe.begin(), probe.end());
+  name.push_back('\0');
+  const int fd = mkstemp(name.data());
+  if (fd < 0) {
+    const int err = errno;
+    throw std::runtime_error(head + "directory '" + dir.string() + "' is not writable (" +
+                             errno_text(err) + ")");
+  }
+  close(fd);
+  std::remove(name.data());
+}
+
+VideoWriter::VideoWriter(const std::string& out_mp4, int width, int height, double fps)
+    : out_path_(out_mp4), width_(width), height_(height) {
+  namespace fs = std::filesystem;
+  if (width < 2 || height < 2 || width % 2 != 0 || height % 2 != 0) {
+    throw std::invalid_argument("video size: expected positive even width and height (H.264 "
+                                "yuv420p), got " + std::to_string(width) + " x " +
+                                std::to_string(height));
+  }
+  if (!(fps > 0) || fps > 1000) {
+    throw std::invalid_argument("video frame rate: expected 0 < fps <= 1000, got " +
+                                format_fps(fps));
+  }
+  const std::string ffmpeg = find_on_path("ffmpeg");
+  if (ffmpeg.empty()) {
+    throw std::runtime_error("ffmpeg not found on PATH: install the Debian package ffmpeg");
+  }
+
+  // temporary video next to the output, so the final rename stays on one file system
+  const fs::path out(out_mp4);
+  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  std::string tmp = (dir / ("." + out.filename().string() + ".tmp-XXXXXX.mp4")).string();
+  std::vector<char> tmp_name(tmp.begin(), tmp.end());
+  tmp_name.push_back('\0');
+  const int tmp_fd = mkstemps(tmp_name.data(), 4);
+  if (tmp_fd < 0) {
+    const int err = errno;
+    throw std::runtime_error("cannot write video '" + out_mp4 + "': expected a writable "
+                             "directory '" + dir.string() + "', got: " + errno_text(err));
+  }
+  close(tmp_fd);
+  tmp_path_ = tmp_name.data();
+
+  // ffmpeg's stderr goes to a temporary log
+  std::string log = (fs::temp_directory_path() / "idmpc-ffmpeg-XXXXXX.log").string();
+  std::vector<char> log_name(log.begin(), log.end());
+  log_name.push_back('\0');
+  const int log_fd = mkostemps(log_name.data(), 4, O_CLOEXEC);
+  if (log_fd < 0) {
+    const int err = errno;
+    std::remove(tmp_path_.c_str());
+    throw std::runtime_error("cannot create a temporary log file for ffmpeg in '" +
+                             fs::temp_directory_path().string() + "': " + errno_text(err));
+  }
+  log_path_ = log_name.data();
+
+  int fds[2];
+  if (pipe2(fds, O_CLOEXEC) != 0) {
+    const int err = errno;
+    close(log_fd);
+    abandon();
+    throw std::runtime_error("cannot create a pipe to ffmpeg: " + errno_text(err));
+  }
+
+  // raw rgb24 frames on stdin -> H.264 yuv420p MP4
+  const std::string size = std::to_string(width) + "x" + std::to_string(height);
+  const std::string rate = format_fps(fps);
+  std::vector<std::string> args = {ffmpeg,       "-hide_banner", "-nostats",  "-loglevel",
+                                   "error",      "-y",           "-f",        "rawvideo",
+                                   "-pix_fmt",   "rgb24",        "-s",        size,
+                                   "-framerate", rate,           "-i",        "pipe:0",
+                                   "-an",        "-c:v",         "libx264",   "-preset",
+                                   "medium",     "-crf",         "18",        "-pix_fmt",
+                                   "yuv420p",    "-movflags",    "+faststart", "-f",
+                                   "mp4",        tmp_path_};
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, fds[0], STDIN_FILENO);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_adddup2(&actions, log_fd, STDERR_FILENO);
+  const int rc = posix_spawn(&pid_, ffmpeg.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  close(fds[0]);
+  close(log_fd);
+  if (rc != 0) {
+    close(fds[1]);
+    pid_ = -1;
+    abandon();
+    throw std::runtime_error("cannot start '" + ffmpeg + "': " + errno_text(rc));
+  }
+  pipe_fd_ = fds[1];
+}
+
+VideoWriter::~VideoWriter() {
+  if (!finished_) abandon();
+}
+
+void VideoWriter::write_frame(const unsigned char* rgb) {
+  if (finished_ || pipe_fd_ < 0) {
+    throw std::logic_error("VideoWriter::write_frame after finish()");
+  }
+  const std::size_t bytes =
+      static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_) * 3;
+  if (!write_all(pipe_fd_, rgb, bytes)) {
+    const int err = errno;
+    fail_with_ffmpeg_status("ffmpeg stopped reading frame " + std::to_string(frames_) + " (" +
+                            errno_text(err) + ")");
+  }
+  ++frames_;
+}
+
+void VideoWriter::finish() {
+  if (finished_) return;
+  close(pipe_fd_);
+  pipe_fd_ = -1;
+  const int status = wait_for_ffmpeg();
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    const std::string tail = file_tail(log_path_);
+    abandon();
+    throw std::runtime_error("ffmpeg failed to encode '" + out_path_ +
+                             "': expected exit status 0, got " + describe_status(status) +
+                             (tail.empty() ? std::string() : "; ffmpeg said: " + tail));
+  }
+  if (std::rename(tmp_path_.c_str(), out_path_.c_str()) != 0) {
+    const int err = errno;
+    abandon();
+    throw std::runtime_error("cannot move the encoded video to '" + out_path_ +
+                             "': " + errno_text(err));
+  }
+  std::remove(log_path_.c_str());
+  finished_ = true;
+}
+
+void VideoWriter::fail_with_ffmpeg_status(const std::string& what) {
+  if (pipe_fd_ >= 0) {
+    close(pipe_fd_);
+    pipe_fd_ = -1;
+  }
+  const int status = wait_for_ffmpeg();
+  const std::string tail = file_tail(log_path_);
+  abandon();
+  throw std::runtime_error(what + " while encoding '" + out_path_ + "': ffmpeg " +
+                           describe_status(status) +
+                           (tail.empty() ? std::string() : "; ffmpeg said: " + tail));
+}
+
+int VideoWriter::wait_for_ffmpeg() {
+  if (pid_ <= 0) return 0;
+  int status = 0;
+  while (waitpid(pid_, &status, 0) < 0) {
+    if (errno != EINTR) {
+      status = 0;
+      break;
+    }
+  }
+  pid_ = -1;
+  return status;
+}
+
+void VideoWriter::abandon() noexcept {
+  if (pipe_fd_ >= 0) {
+    close(pipe_fd_);
+    pipe_fd_ = -1;
+  }
+  if (pid_ > 0) {
+    kill(pid_, SIGTERM);
+    wait_for_ffmpeg();
+  }
+  if (!tmp_path_.empty()) std::remove(tmp_path_.c_str());
+  if (!log_path_.empty()) std::remove(log_path_.c_str());
+  finished_ = true;
+}
+
+}  // namespace idmpc::render

@@ -1,0 +1,66 @@
+#pragma once
+/// @file video_writer.hpp
+/// @brief H.264 MP4 encoding by piping raw RGB frames into an ffmpeg child process.
+
+#include <string>
+#include <sys/types.h>
+
+namespace idmpc::render {
+
+/// @brief Full path of an executable named `name` on PATH, or "" when there is none.
+std::string find_on_path(const std::string& name);
+
+/// @brief Checks that a file can be created at `path` (its directory exists, is a directory and
+/// is writable, and `path` itself is not a directory) without creating it; throws
+/// std::runtime_error naming the path and the reason otherwise.
+void check_output_writable(const std::string& path);
+
+/// @brief Writes an MP4 (H.264, yuv420p) from raw RGB frames through `ffmpeg`.
+///
+/// ffmpeg writes to a temporary file next to the output, which finish() renames onto the
+/// output once ffmpeg exits cleanly; abandoning the writer (destruction without finish(), for
+/// example during an exception) stops ffmpeg and removes the temporary file, so a failed run
+/// never leaves a truncated video behind. ffmpeg's stderr goes to a temporary log whose tail
+/// is quoted when ffmpeg fails.
+class VideoWriter {
+ public:
+  /// @brief Starts ffmpeg. width and height must be positive and even (yuv420p), fps > 0.
+  /// Throws std::invalid_argument for bad sizes and std::runtime_error when ffmpeg is not on
+  /// PATH or cannot be started, or the temporary files cannot be created.
+  VideoWriter(const std::string& out_mp4, int width, int height, double fps);
+  ~VideoWriter();
+
+  VideoWriter(const VideoWriter&) = delete;
+  VideoWriter& operator=(const VideoWriter&) = delete;
+  VideoWriter(VideoWriter&&) = delete;
+  VideoWriter& operator=(VideoWriter&&) = delete;
+
+  /// @brief Appends one frame: width*height*3 bytes of RGB, rows from top to bottom.
+  /// Throws std::runtime_error (with ffmpeg's exit status and stderr tail) if ffmpeg died.
+  void write_frame(const unsigned char* rgb);
+
+  /// @brief Closes the stream, waits for ffmpeg and moves the video to its output path.
+  /// Throws std::runtime_error with the exit status and ffmpeg's stderr tail on failure.
+  void finish();
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int frames() const { return frames_; }
+
+ private:
+  [[noreturn]] void fail_with_ffmpeg_status(const std::string& what);
+  int wait_for_ffmpeg();
+  void abandon() noexcept;
+
+  std::string out_path_;
+  std::string tmp_path_;
+  std::string log_path_;
+  int width_ = 0;
+  int height_ = 0;
+  int frames_ = 0;
+  int pipe_fd_ = -1;
+  pid_t pid_ = -1;
+  bool finished_ = false;
+};
+
+}  // namespace idmpc::render
