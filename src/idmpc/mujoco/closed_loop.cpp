@@ -1,0 +1,108 @@
+#include "idmpc/mujoco/closed_loop.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace idmpc::mj {
+namespace {
+
+// a measured joint speed beyond this [rad/s or m/s] means the loop has blown up
+constexpr double kMaxSpeed = 1e4;
+
+}  // namespace
+
+double percentile(std::vector<double> x, double p) {
+  if (x.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(x.begin(), x.end());
+  const double pos = p / 100.0 * static_cast<double>(x.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, x.size() - 1);
+  return x[lo] + (pos - static_cast<double>(lo)) * (x[hi] - x[lo]);
+}
+
+RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<double>& q_ref,
+                          const ClosedLoopSettings& settings,
+                          const std::function<void(const StepRecord&)>& on_step) {
+  const int n = ocp.n();
+  if (settings.q0.size() != n || settings.v0.size() != n) {
+    throw std::invalid_argument("initial state must have " + std::to_string(n) + " entries, got " +
+                                std::to_string(settings.q0.size()));
+  }
+  if (!(settings.duration > 0)) {
+    throw std::invalid_argument("duration must be positive, got " + std::to_string(settings.duration));
+  }
+  const double dt = solver.settings().dt;
+  const long steps = std::lround(settings.duration / dt);
+  plant.set_timestep(dt);
+  plant.reset(settings.q0, settings.v0);
+  solver.enable_timing(settings.phase_timing);
+
+  RunResult result;
+  result.update_ms.reserve(static_cast<size_t>(steps));
+  VecX<double> q = plant.q(), v = plant.v(), tau = VecX<double>::Zero(n), tau_next = tau;
+  result.init_residual = solver.initialize(0.0, q, v);
+  // the torque of the solution at t = 0 is applied over the first step; afterwards the update
+  // made at t is applied at t_app = t + Δt (paper eqs. 27–28), as in C/GMRES's own loop
+  ocp.applied_torque(q, v, solver.solution(), solver.solution().head(n), 0.0, tau);
+  VecX<double> a0_applied = solver.solution().head(n);
+  double residual_sum = 0;
+  UpdateTimes phase_sum;
+
+  for (long k = 0; k < steps; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    q = plant.q();
+    v = plant.v();
+    // one control update: C/GMRES for t + Δt, then the torque to apply then
+    const auto start = std::chrono::steady_clock::now();
+    const bool ok = solver.update(t, q, v);
+    ocp.applied_torque(q, v, solver.solution(), a0_applied, dt, tau_next);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+    std::string reason;
+    if (!ok) {
+      reason = "C/GMRES solution or residual became non-finite or exceeded 1e8";
+    } else if (!tau_next.allFinite()) {
+      reason = "non-finite torque";
+    }
+    // the row holds the measured state, the torque applied over [t, t + Δt) and this update
+    on_step(StepRecord{t, q, v, tau, solver.residual_norm(), ms});
+    result.steps = static_cast<int>(k + 1);
+    if (reason.empty()) {
+      result.update_ms.push_back(ms);
+      residual_sum += solver.residual_norm();
+      const UpdateTimes& ph = solver.last_times();
+      phase_sum.total += ph.total;
+      phase_sum.rollout += ph.rollout;
+      phase_sum.costate += ph.costate;
+      phase_sum.gmres += ph.gmres;
+      result.evaluations_per_update = solver.evaluations();
+      if (!plant.step(tau, &reason)) {
+        // the plant blew up under this torque: reason says how
+      } else if (plant.v().cwiseAbs().maxCoeff() > kMaxSpeed) {
+        reason = "joint speed exceeded 1e4";
+      }
+    }
+    if (!reason.empty()) {
+      result.diverged = true;
+      result.diverged_at = t;
+      result.divergence_reason = reason;
+      break;
+    }
+    tau.swap(tau_next);
+    a0_applied = solver.solution().head(n);
+  }
+
+  const double m = std::max<double>(1.0, static_cast<double>(result.update_ms.size()));
+  result.mean_residual = residual_sum / m;
+  result.mean_phase_ms = UpdateTimes{1e3 * phase_sum.total / m, 1e3 * phase_sum.rollout / m,
+                                     1e3 * phase_sum.costate / m, 1e3 * phase_sum.gmres / m};
+  result.final_q = plant.q();
+  result.final_v = plant.v();
+  result.final_q_error = (result.final_q - q_ref).cwiseAbs().maxCoeff();
+  result.final_v_norm = result.final_v.norm();
+  return result;
+}
+
+}  // namespace idmpc::mj

@@ -1,0 +1,56 @@
+#pragma once
+/// @file closed_loop.hpp
+/// @brief Simulation in the loop: every Δt the controller reads (q, v) from the MuJoCo plant,
+/// runs one C/GMRES update and applies its torque for one plant step (DESIGN §6).
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "idmpc/mujoco/plant.hpp"
+#include "idmpc/solver/cgmres.hpp"
+
+namespace idmpc::mj {
+
+struct ClosedLoopSettings {
+  double duration = 10.0;
+  VecX<double> q0, v0;
+  bool phase_timing = true;  ///< split each update's time into rollout/costate/GMRES
+};
+
+/// @brief One control step as logged: measured state, applied torque, residual, cost.
+struct StepRecord {
+  double t;
+  const VecX<double>& q;
+  const VecX<double>& v;
+  const VecX<double>& u;
+  double residual;
+  double update_ms;
+};
+
+struct RunResult {
+  bool diverged = false;
+  double diverged_at = std::numeric_limits<double>::quiet_NaN();
+  std::string divergence_reason;
+  int steps = 0;                    ///< control steps completed (rows logged)
+  std::vector<double> update_ms;    ///< per successful update (includes the applied torque)
+  double init_residual = 0;         ///< ‖F_0‖ after the zero-horizon Newton solve
+  double mean_residual = 0;
+  int evaluations_per_update = 0;   ///< F evaluations in one update
+  UpdateTimes mean_phase_ms;        ///< mean of each phase [ms]
+  VecX<double> final_q, final_v;
+  double final_q_error = 0;         ///< max |q_i − q_ref,i| at the end
+  double final_v_norm = 0;
+};
+
+/// @brief Runs the closed loop from (q0, v0) for `duration`, calling on_step for each logged
+/// step. A divergence ends the run cleanly: it is recorded in the result, never thrown.
+RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<double>& q_ref,
+                          const ClosedLoopSettings& settings,
+                          const std::function<void(const StepRecord&)>& on_step);
+
+/// @brief Median-style percentile (p in [0, 100]) of a sample, NaN when empty.
+double percentile(std::vector<double> x, double p);
+
+}  // namespace idmpc::mj

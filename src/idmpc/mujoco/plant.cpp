@@ -1,0 +1,60 @@
+#include "idmpc/mujoco/plant.hpp"
+
+#include <stdexcept>
+
+namespace idmpc::mj {
+
+Plant::Plant(const mjModel* m, const Actuation& actuation) : actuation_(actuation) {
+  install_error_handlers();
+  m_.reset(mj_copyModel(nullptr, m));
+  if (!m_) throw std::runtime_error("MuJoCo could not copy the model");
+  if (actuation_.direct) m_->opt.disableflags |= mjDSBL_ACTUATION;
+  d_ = make_data(m_.get());
+}
+
+void Plant::set_timestep(double dt) {
+  if (!(dt > 0)) throw std::invalid_argument("plant timestep must be positive, got " + std::to_string(dt));
+  m_->opt.timestep = dt;
+}
+
+void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
+  if (q.size() != m_->nq || v.size() != m_->nv) {
+    throw std::invalid_argument("initial state has " + std::to_string(q.size()) +
+                                " positions, the model has " + std::to_string(m_->nq));
+  }
+  mj_resetData(m_.get(), d_.get());
+  mju_copy(d_->qpos, q.data(), m_->nq);
+  mju_copy(d_->qvel, v.data(), m_->nv);
+  mj_forward(m_.get(), d_.get());
+}
+
+bool Plant::step(const VecX<double>& tau, std::string* reason) {
+  if (!tau.allFinite()) {
+    if (reason) *reason = "non-finite torque";
+    return false;
+  }
+  if (actuation_.direct) {
+    mju_copy(d_->qfrc_applied, tau.data(), m_->nv);
+  } else {
+    for (int i = 0; i < m_->nv; ++i) {
+      d_->ctrl[actuation_.actuator_of_dof[i]] = tau[i] * actuation_.ctrl_per_torque[i];
+    }
+  }
+  int warnings_before = 0;
+  for (int w = 0; w < mjNWARNING; ++w) warnings_before += d_->warning[w].number;
+  mj_step(m_.get(), d_.get());
+  int warnings_after = 0;
+  for (int w = 0; w < mjNWARNING; ++w) warnings_after += d_->warning[w].number;
+  // MuJoCo resets the state on a bad acceleration: that is a divergence, not a new start
+  if (warnings_after != warnings_before) {
+    if (reason) *reason = "MuJoCo warning during mj_step (e.g. huge or non-finite acceleration)";
+    return false;
+  }
+  if (!q().allFinite() || !v().allFinite()) {
+    if (reason) *reason = "non-finite plant state";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace idmpc::mj

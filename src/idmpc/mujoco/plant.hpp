@@ -1,0 +1,38 @@
+#pragma once
+/// @file plant.hpp
+/// @brief The robot in the loop: MuJoCo's mj_step on the full model (contacts, limits and all).
+
+#include <string>
+
+#include "idmpc/mujoco/import.hpp"
+#include "idmpc/mujoco/load.hpp"
+#include "idmpc/spatial/spatial.hpp"
+
+namespace idmpc::mj {
+
+class Plant {
+ public:
+  /// Keeps its own copy of the model; direct actuation disables the model's actuators.
+  Plant(const mjModel* m, const Actuation& actuation);
+
+  int nv() const { return m_->nv; }
+  double timestep() const { return m_->opt.timestep; }
+  /// @brief Sets the sampling period used by step (MuJoCo's timestep).
+  void set_timestep(double dt);
+  void reset(const VecX<double>& q, const VecX<double>& v);
+  /// @brief Applies τ (through the motors or qfrc_applied) for one step. Returns false with
+  /// a reason if the state became non-finite or MuJoCo raised a warning (e.g. bad qacc).
+  bool step(const VecX<double>& tau, std::string* reason);
+
+  Eigen::Map<const VecX<double>> q() const { return {d_->qpos, m_->nq}; }
+  Eigen::Map<const VecX<double>> v() const { return {d_->qvel, m_->nv}; }
+  double time() const { return d_->time; }
+  const mjModel* model() const { return m_.get(); }
+
+ private:
+  ModelPtr m_;
+  DataPtr d_;
+  Actuation actuation_;
+};
+
+}  // namespace idmpc::mj

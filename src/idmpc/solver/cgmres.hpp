@@ -1,0 +1,78 @@
+#pragma once
+/// @file cgmres.hpp
+/// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6), one solver for every Ocp:
+/// Ḟ = −ζF is tracked by solving (∂F/∂U) U̇ = −ζF − (∂F/∂x)ẋ − ∂F/∂t with matrix-free
+/// forward-difference products and kmax GMRES iterations, then U ← U + Δt U̇.
+
+#include <string>
+
+#include "idmpc/ocp/ocp.hpp"
+#include "idmpc/solver/gmres.hpp"
+#include "idmpc/solver/horizon.hpp"
+
+namespace idmpc {
+
+struct CgmresSettings {
+  int kmax = 10;
+  double Tf = 0.5;
+  double alpha = 1.0;
+  double dt = 1e-3;    ///< sampling period Δt
+  double zeta = 0;     ///< stabilization ζ; 0 means 1/Δt
+  double h = 1e-8;     ///< forward-difference increment
+  int init_iterations = 50;
+  double init_tolerance = 1e-10;
+
+  /// @brief Throws std::invalid_argument naming the first bad setting.
+  void validate() const;
+};
+
+/// @brief Wall-clock split of one update [s].
+struct UpdateTimes {
+  double total = 0;
+  double rollout = 0;  ///< forward sweeps of the F evaluations (dynamics)
+  double costate = 0;  ///< backward sweeps (derivatives/adjoints, costates)
+  double gmres = 0;    ///< everything else: Arnoldi, rotations, vector updates
+};
+
+class Cgmres {
+ public:
+  Cgmres(Ocp& ocp, const CgmresSettings& settings);
+
+  /// @brief Zero-horizon initialization at time t: Newton on the one-stage problem F_0 = 0
+  /// (every stage sees x), copied to all stages. Returns ‖F_0‖ reached.
+  double initialize(double t, const Eigen::Ref<const VecX<double>>& q,
+                    const Eigen::Ref<const VecX<double>>& v);
+
+  /// @brief One C/GMRES update at time t from the measured (q, v). Returns false if the
+  /// solution or the residual became non-finite or blew up (divergence).
+  bool update(double t, const Eigen::Ref<const VecX<double>>& q,
+              const Eigen::Ref<const VecX<double>>& v);
+
+  const VecX<double>& solution() const { return U_; }
+  const VecX<double>& solution_rate() const { return Udot_; }
+  /// @brief ‖F(U, x, t)‖ at the start of the last update (the optimality error of the solution
+  /// being tracked, at the measured state).
+  double residual_norm() const { return residual_norm_; }
+  int gmres_iterations() const { return iterations_; }
+  /// @brief F evaluations in the last update (kmax + 3 unless GMRES stopped early).
+  int evaluations() const { return evaluations_; }
+  const UpdateTimes& last_times() const { return times_; }
+  void enable_timing(bool on) { timing_ = on; ocp_.enable_timing(on); }
+  const CgmresSettings& settings() const { return settings_; }
+  const Ocp& ocp() const { return ocp_; }
+  double horizon(double t) const { return horizon_.length(t); }
+
+ private:
+  Ocp& ocp_;
+  CgmresSettings settings_;
+  Horizon horizon_;
+  Gmres gmres_;
+  bool timing_ = false;
+  VecX<double> U_, Udot_, F_, Fx_, Fw_, Uw_, b_, qh_, vh_, a0_;
+  double residual_norm_ = 0;
+  int iterations_ = 0;
+  int evaluations_ = 0;
+  UpdateTimes times_;
+};
+
+}  // namespace idmpc

@@ -1,0 +1,196 @@
+#!/usr/bin/python3
+"""Draws the paper's Fig. 2 (joint angles, velocities and torques over time) from closed-loop logs.
+
+Each log is a CSV with the header t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms and
+one row per control step. Several logs are overlaid (solid, dashed, dotted, ...) with the same
+colour per joint, e.g. the FD and the ID controller on the same task:
+
+    plot_fig2.py fd.csv id.csv --labels FD ID -o fig2.png [--residual]
+
+--residual adds a fourth panel with the optimality residual on a log scale. The PNG is written
+to a temporary file and renamed, so a reader never sees a half-written figure.
+"""
+
+import argparse
+import csv
+import math
+import os
+import sys
+import tempfile
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (the backend must be chosen first)
+from matplotlib.lines import Line2D  # noqa: E402
+
+LINESTYLES = ["-", "--", ":", "-."]
+
+
+class LogError(Exception):
+    """A log that cannot be read; the message names the file."""
+
+
+class Log:
+    """Columns of one closed-loop log."""
+
+    def __init__(self, path, label):
+        self.path = path
+        self.label = label
+        self.n = 0
+        self.t = []
+        self.q = []  # q[j] is the time series of joint j
+        self.v = []
+        self.u = []
+        self.residual = []
+        self.update_ms = []
+
+
+def expected_header(n):
+    return (["t"] + [f"q{j}" for j in range(n)] + [f"v{j}" for j in range(n)]
+            + [f"u{j}" for j in range(n)] + ["residual", "update_ms"])
+
+
+def read_log(path, label):
+    """Reads and validates one log; raises LogError naming the file."""
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except OSError as err:
+        raise LogError(f"cannot read log '{path}': {err.strerror}") from None
+    if not rows:
+        raise LogError(f"log '{path}' is empty (expected a header t,q0,...,residual,update_ms)")
+    header = [name.strip() for name in rows[0]]
+    ncols = len(header)
+    n = (ncols - 3) // 3
+    if ncols < 6 or (ncols - 3) % 3 != 0 or header != expected_header(n):
+        shown = ",".join(header[:8]) + (",..." if ncols > 8 else "")
+        raise LogError(f"log '{path}' has a malformed header: expected "
+                       "t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms with n >= 1, "
+                       f"got '{shown}' ({ncols} columns)")
+    log = Log(path, label)
+    log.n = n
+    log.q = [[] for _ in range(n)]
+    log.v = [[] for _ in range(n)]
+    log.u = [[] for _ in range(n)]
+    for lineno, row in enumerate(rows[1:], start=2):
+        if not row or all(not cell.strip() for cell in row):
+            continue
+        if len(row) != ncols:
+            raise LogError(f"log '{path}' line {lineno}: expected {ncols} values, got {len(row)}")
+        try:
+            values = [float(cell) for cell in row]
+        except ValueError:
+            raise LogError(f"log '{path}' line {lineno}: not a number in '{','.join(row)[:80]}'") \
+                from None
+        log.t.append(values[0])
+        for j in range(n):
+            log.q[j].append(values[1 + j])
+            log.v[j].append(values[1 + n + j])
+            log.u[j].append(values[1 + 2 * n + j])
+        log.residual.append(values[1 + 3 * n])
+        log.update_ms.append(values[2 + 3 * n])
+    if not log.t:
+        raise LogError(f"log '{path}' has a header but no data rows")
+    return log
+
+
+def joint_colours(n):
+    if n <= 10:
+        cmap = plt.get_cmap("tab10")
+        return [cmap(j) for j in range(n)]
+    cmap = plt.get_cmap("viridis")
+    return [cmap(j / (n - 1)) for j in range(n)]
+
+
+def positive_or_nan(xs):
+    """Values for a log-scale axis: non-positive and non-finite entries become gaps."""
+    return [abs(x) if math.isfinite(x) and x != 0 else math.nan for x in xs]
+
+
+def draw(logs, residual, title):
+    n_max = max(log.n for log in logs)
+    colours = joint_colours(n_max)
+    panels = [("q", "joint angle [rad]"), ("v", "joint velocity [rad/s]"), ("u", "torque [Nm]")]
+    if residual:
+        panels.append(("residual", "optimality residual"))
+    fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(8, 2.4 * len(panels) + 0.8),
+                             constrained_layout=True)
+    for ax, (key, ylabel) in zip(axes, panels):
+        for k, log in enumerate(logs):
+            style = LINESTYLES[k % len(LINESTYLES)]
+            if key == "residual":
+                ax.semilogy(log.t, positive_or_nan(log.residual), style, color="0.2", lw=1.1)
+                continue
+            for j, series in enumerate(getattr(log, key)):
+                ax.plot(log.t, series, style, color=colours[j], lw=1.2)
+        ax.set_ylabel(ylabel)
+        ax.grid(True, which="major", alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    axes[-1].set_xlim(min(log.t[0] for log in logs), max(log.t[-1] for log in logs))
+
+    # legends: joints by colour on the top panel, logs by line style when several are overlaid
+    if n_max <= 16:
+        handles = [Line2D([], [], color=colours[j], lw=2) for j in range(n_max)]
+        axes[0].legend(handles, [f"joint {j}" for j in range(n_max)], loc="upper right",
+                       ncol=min(n_max, 8), fontsize="small", framealpha=0.85)
+    else:
+        axes[0].set_title(f"colour: joint 0 (purple) to joint {n_max - 1} (yellow)",
+                          fontsize="small", loc="right")
+    if len(logs) > 1:
+        handles = [Line2D([], [], color="0.2", ls=LINESTYLES[k % len(LINESTYLES)], lw=1.5)
+                   for k in range(len(logs))]
+        axes[1].legend(handles, [log.label for log in logs], loc="upper right",
+                       fontsize="small", framealpha=0.85)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def save_atomically(fig, path, dpi):
+    directory = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(prefix=".plot_fig2_", suffix=".png", dir=directory)
+    os.close(fd)
+    try:
+        fig.savefig(tmp, format="png", dpi=dpi)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(
+        description="Draws the paper's Fig. 2 from one or more closed-loop log CSVs.")
+    parser.add_argument("logs", nargs="+", help="closed-loop log CSV files (overlaid)")
+    parser.add_argument("--labels", nargs="+", help="legend label per log (default: file names)")
+    parser.add_argument("-o", "--output", default="fig2.png", help="PNG to write (default fig2.png)")
+    parser.add_argument("--residual", action="store_true",
+                        help="add a panel with the optimality residual (log scale)")
+    parser.add_argument("--title", help="figure title")
+    parser.add_argument("--dpi", type=int, default=150, help="resolution (default 150)")
+    args = parser.parse_args(argv)
+    if args.labels is not None and len(args.labels) != len(args.logs):
+        parser.error(f"--labels: expected {len(args.logs)} labels (one per log), "
+                     f"got {len(args.labels)}")
+    labels = args.labels or [os.path.splitext(os.path.basename(p))[0] for p in args.logs]
+    try:
+        logs = [read_log(path, label) for path, label in zip(args.logs, labels)]
+    except LogError as err:
+        print(f"plot_fig2.py: {err}", file=sys.stderr)
+        return 1
+    fig = draw(logs, args.residual, args.title)
+    try:
+        save_atomically(fig, args.output, args.dpi)
+    except OSError as err:
+        print(f"plot_fig2.py: cannot write '{args.output}': {err.strerror or err}", file=sys.stderr)
+        return 1
+    finally:
+        plt.close(fig)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
