@@ -2,6 +2,7 @@
 /// @file model.hpp
 /// @brief Immutable kinematic tree of 1-DoF joints (one link per dof), in topological order.
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -34,6 +35,8 @@ struct Model {
   Vec3<double> gravity = Vec3<double>(0, 0, -9.81);  ///< world gravity (zero if disabled)
   std::vector<std::string> joint_names;         ///< for messages
   std::vector<int> subtree_end;                 ///< subtree of i is [i, subtree_end[i])
+  std::vector<int> axis_index;                  ///< 0/1/2 if axis[i] = ±e_k, else −1
+  std::vector<double> axis_sign;                ///< ±1 for an axis-aligned joint
   std::string name;
 
   /// @brief Checks sizes and topology; fills S and subtree_end. Throws std::invalid_argument.
@@ -47,12 +50,20 @@ struct Model {
     }
     if (joint_names.size() != un) joint_names.resize(un);
     S.assign(un, Vec6<double>::Zero());
+    axis_index.assign(un, -1);
+    axis_sign.assign(un, 1.0);
     subtree_end.assign(un, 0);
     for (int i = 0; i < n; ++i) {
       if (parent[i] >= i || parent[i] < -1) {
         throw std::invalid_argument("link " + std::to_string(i) +
                                     " is not in topological order (parent " +
                                     std::to_string(parent[i]) + ")");
+      }
+      for (int k = 0; k < 3; ++k) {
+        if (std::abs(axis[i][k]) == 1.0) {
+          axis_index[i] = k;
+          axis_sign[i] = axis[i][k];
+        }
       }
       if (joint_type[i] == JointType::kRevolute) {
         S[i].head<3>() = axis[i];

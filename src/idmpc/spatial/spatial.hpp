@@ -26,13 +26,19 @@ template <typename S> Mat3<S> skew(const Vec3<S>& x) {
   return m;
 }
 
+/// @brief 3-D cross product written out (Eigen's generic version shuffles SSE registers).
+template <typename S, typename A, typename B>
+inline Vec3<S> cross3(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b) {
+  return Vec3<S>(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]);
+}
+
 /// @brief Motion cross product m1 × m2 (Featherstone eq. 2.31).
 template <typename S> Vec6<S> cross_motion(const Vec6<S>& m1, const Vec6<S>& m2) {
   const auto w1 = m1.template head<3>(), v1 = m1.template tail<3>();
   const auto w2 = m2.template head<3>(), v2 = m2.template tail<3>();
   Vec6<S> r;
-  r.template head<3>() = w1.cross(w2);
-  r.template tail<3>() = w1.cross(v2) + v1.cross(w2);
+  r.template head<3>() = cross3<S>(w1, w2);
+  r.template tail<3>() = cross3<S>(w1, v2) + cross3<S>(v1, w2);
   return r;
 }
 
@@ -41,8 +47,8 @@ template <typename S> Vec6<S> cross_force(const Vec6<S>& m, const Vec6<S>& f) {
   const auto w = m.template head<3>(), v = m.template tail<3>();
   const auto n = f.template head<3>(), fl = f.template tail<3>();
   Vec6<S> r;
-  r.template head<3>() = w.cross(n) + v.cross(fl);
-  r.template tail<3>() = w.cross(fl);
+  r.template head<3>() = cross3<S>(w, n) + cross3<S>(v, fl);
+  r.template tail<3>() = cross3<S>(w, fl);
   return r;
 }
 
@@ -90,7 +96,7 @@ template <typename S> struct Transform {
     Vec6<S> out;
     const auto w = m.template head<3>();
     out.template head<3>() = E * w;
-    out.template tail<3>() = E * (m.template tail<3>() - r.cross(w));
+    out.template tail<3>() = E * (m.template tail<3>() - cross3<S>(r, w));
     return out;
   }
   /// @brief X⁻¹ m: motion from B to A coordinates.
@@ -98,14 +104,14 @@ template <typename S> struct Transform {
     Vec6<S> out;
     const Vec3<S> w = E.transpose() * m.template head<3>();
     out.template head<3>() = w;
-    out.template tail<3>() = E.transpose() * m.template tail<3>() + r.cross(w);
+    out.template tail<3>() = E.transpose() * m.template tail<3>() + cross3<S>(r, w);
     return out;
   }
   /// @brief X* f: force from A to B coordinates.
   Vec6<S> apply_force(const Vec6<S>& f) const {
     Vec6<S> out;
     const auto fl = f.template tail<3>();
-    out.template head<3>() = E * (f.template head<3>() - r.cross(fl));
+    out.template head<3>() = E * (f.template head<3>() - cross3<S>(r, fl));
     out.template tail<3>() = E * fl;
     return out;
   }
@@ -113,7 +119,7 @@ template <typename S> struct Transform {
   Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
     Vec6<S> out;
     const Vec3<S> fl = E.transpose() * f.template tail<3>();
-    out.template head<3>() = E.transpose() * f.template head<3>() + r.cross(fl);
+    out.template head<3>() = E.transpose() * f.template head<3>() + cross3<S>(r, fl);
     out.template tail<3>() = fl;
     return out;
   }
@@ -161,8 +167,8 @@ template <typename S> struct Inertia {
   Vec6<S> apply(const Vec6<S>& mo) const {
     const auto w = mo.template head<3>(), v = mo.template tail<3>();
     Vec6<S> out;
-    out.template head<3>() = Ibar * w + h.cross(v);
-    out.template tail<3>() = m * v - h.cross(w);
+    out.template head<3>() = Ibar * w + cross3<S>(h, v);
+    out.template tail<3>() = m * v - cross3<S>(h, w);
     return out;
   }
   Inertia& operator+=(const Inertia& o) {

@@ -1,0 +1,77 @@
+#pragma once
+/// @file overlay.hpp
+/// @brief 2-D overlays drawn over a rendered frame with MuJoCo's mjr_* functions: a text table
+/// on a translucent panel and a time plot.
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+namespace idmpc::render {
+
+using Rgb = std::array<float, 3>;
+
+/// @brief One cell of a table row.
+struct Cell {
+  std::string text;
+  Rgb rgb{1, 1, 1};
+  bool right = false;  ///< right-aligned in its column
+};
+
+/// @brief One table row; a row of one cell spans all columns. An optional colour swatch
+/// (a legend entry) is drawn before the first cell.
+struct Row {
+  std::vector<Cell> cells;
+  bool swatch = false;
+  Rgb swatch_rgb{1, 1, 1};
+};
+
+/// @brief Column widths and panel size of a table, in pixels. Measuring every frame's rows
+/// into one layout keeps the panel from jittering as the numbers change.
+class TableLayout {
+ public:
+  explicit TableLayout(const mjrContext& con);
+  /// @brief Widens the columns to fit these rows.
+  void fit(const std::vector<Row>& rows);
+  int width() const;
+  int height() const;
+  /// @brief Draws rows with the panel's top-left corner at (left, top), pixels from the
+  /// bottom-left of the current framebuffer.
+  void draw(const std::vector<Row>& rows, int left, int top) const;
+
+ private:
+  const mjrContext& con_;
+  std::vector<int> columns_;
+  int span_ = 0;  // widest single-cell row
+  int rows_ = 0;
+  bool swatch_ = false;
+  int pad_ = 0, line_ = 0, gap_ = 0, swatch_size_ = 0;
+};
+
+/// @brief Width in pixels of text in MuJoCo's normal font.
+int text_width(const mjrContext& con, const std::string& text);
+
+/// @brief A plot of sampled curves over a fixed time axis with a moving time cursor.
+class TimePlot {
+ public:
+  /// @param title e.g. "|u| [N m]"
+  /// @param t0, t1 time axis
+  /// @param curves per curve its samples (t, value), t increasing
+  /// @param colours one per curve
+  TimePlot(const std::string& title, double t0, double t1,
+           std::vector<std::vector<std::array<float, 2>>> curves, std::vector<Rgb> colours);
+  /// @brief Draws the curves up to time t with a cursor at t into `viewport`.
+  void draw(const mjrRect& viewport, double t, const mjrContext& con);
+
+ private:
+  std::unique_ptr<mjvFigure> fig_;  // ~800 kB: on the heap
+  std::vector<std::vector<std::array<float, 2>>> curves_;
+};
+
+/// @brief A round step (1, 2 or 5 times a power of ten) that cuts `span` into about `parts`.
+double nice_step(double span, int parts);
+
+}  // namespace idmpc::render
