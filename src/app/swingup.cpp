@@ -56,6 +56,8 @@ void add_swingup_options(CLI::App& sub, SwingupOptions& opt) {
   sub.add_option("--R", opt.R, "weight on torque: scalar or one per joint")->capture_default_str();
   sub.add_flag("--direct-torque", opt.direct_torque,
                "ignore the model's actuators and apply joint torques directly");
+  sub.add_flag("!--no-simd-stages", opt.simd_stages,
+               "ID + adjoint: evaluate the horizon stages one by one instead of in SIMD lanes");
 }
 
 SwingupOutcome run_swingup(const SwingupOptions& opt, const std::string& log_path) {
@@ -96,6 +98,7 @@ SwingupOutcome run_swingup(const SwingupOptions& opt, const std::string& log_pat
   if (!q0.allFinite() || !q_ref.allFinite()) throw std::invalid_argument("--q0/--qref must be finite");
 
   Ocp ocp(model, formulation, mode, w, q_ref, opt.N);
+  ocp.set_stage_batching(opt.simd_stages);
   Cgmres solver(ocp, cs);
   mj::Plant plant(m.get(), imported.actuation);
   mj::ClosedLoopSettings ls;
@@ -131,6 +134,7 @@ SwingupOutcome run_swingup(const SwingupOptions& opt, const std::string& log_pat
   s["n"] = n;
   s["formulation"] = opt.formulation;
   s["derivatives"] = opt.derivatives;
+  s["simd_stages"] = ocp.stage_batching();
   s["N"] = opt.N;
   s["kmax"] = opt.kmax;
   s["Tf"] = opt.Tf;

@@ -30,6 +30,7 @@ struct SwingupOptions {
   std::vector<double> qref;  ///< empty: 0
   std::vector<double> Qq{1.0}, Qv{0.1}, Qa{0.0}, R{1e-4};
   bool direct_torque = false;
+  bool simd_stages = true;  ///< ID + adjoint: evaluate stages in SIMD lanes
 };
 
 /// @brief Adds the swing-up options to a CLI sub-command.

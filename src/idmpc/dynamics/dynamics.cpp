@@ -1,6 +1,7 @@
 // Compiles every dynamics header once for double, so that template errors surface in the
 // library build rather than in each user.
 #include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/spatial/pack.hpp"
 
 namespace idmpc {
 
@@ -18,4 +19,14 @@ template void aba_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
 template void rnea_vjp(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template struct DataTpl<double>;
 
+}  // namespace idmpc
+
+// the SIMD-pack instantiation used for batched horizon stages
+namespace idmpc {
+using Vp = VecX<StagePack>;
+template const Vp& rnea(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
+                        const Eigen::MatrixBase<Vp>&, const Eigen::MatrixBase<Vp>&);
+template void rnea_vjp(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&);
+template const Vp& aba(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
+                       const Eigen::MatrixBase<Vp>&, const Eigen::MatrixBase<Vp>&);
 }  // namespace idmpc

@@ -3,6 +3,7 @@
 /// @brief Per-thread workspace of the dynamics algorithms. Every buffer is allocated here;
 /// the algorithms never allocate.
 
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -58,7 +59,8 @@ template <typename S> struct DataTpl {
 
   // forward-dynamics derivatives
   MatX<S> Minv;
-  Eigen::LLT<MatX<S>> llt;
+  /// Cholesky of M, only for real scalars (a SIMD pack has no pivots to compare)
+  std::conditional_t<std::is_same_v<S, double>, Eigen::LLT<MatX<double>>, int> llt;
   MatX<S> da_dq, da_dv;
 
   // RNEA vector–Jacobian products: adjoints of body force, acceleration, velocity

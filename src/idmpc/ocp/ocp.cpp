@@ -1,5 +1,6 @@
 #include "idmpc/ocp/ocp.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <stdexcept>
 
@@ -48,6 +49,7 @@ Ocp::Ocp(const Model& model, Formulation formulation, DerivativeMode mode, OcpWe
       weights_(std::move(weights)),
       q_ref_(std::move(q_ref)),
       N_(N),
+      pack_data_(model),
       control_data_(model) {
   const int n = model.n;
   if (N < 1) throw std::invalid_argument("horizon steps N must be at least 1, got " + std::to_string(N));
@@ -67,6 +69,37 @@ Ocp::Ocp(const Model& model, Formulation formulation, DerivativeMode mode, OcpWe
   for (VecX<double>* x : {&lmd_, &gmm_, &lmd_next_, &gmm_next_, &gq_, &gv_, &w_, &qt_, &vt_}) {
     *x = VecX<double>::Zero(n);
   }
+  for (VecX<StagePack>* x : {&qp_, &vp_, &ap_, &wp_}) *x = VecX<StagePack>::Zero(n);
+  for (MatX<double>* x : {&gq_all_, &gv_all_, &Mw_all_}) *x = MatX<double>::Zero(n, N);
+  batched_ = batchable();
+}
+
+// ID with adjoints: u_i = ID(q_i, v_i, a_i) and (∂ID/∂q)ᵀw_i, (∂ID/∂v)ᵀw_i, M w_i with
+// w_i = R u_i for kStageLanes stages per RNEA; the last group repeats its last stage
+void Ocp::batched_stage_dynamics(int stages) {
+  const int n = model_.n;
+  for (int i0 = 0; i0 < stages; i0 += kStageLanes) {
+    for (int k = 0; k < kStageLanes; ++k) {
+      const int i = std::min(i0 + k, stages - 1);
+      for (int j = 0; j < n; ++j) {
+        qp_[j][k] = q_(j, i);
+        vp_[j][k] = v_(j, i);
+        ap_[j][k] = a_(j, i);
+      }
+    }
+    const VecX<StagePack>& tau = rnea(model_, pack_data_, qp_, vp_, ap_);
+    for (int j = 0; j < n; ++j) wp_[j] = weights_.R[j] * tau[j];
+    rnea_vjp(model_, pack_data_, wp_);
+    for (int k = 0; k < kStageLanes && i0 + k < stages; ++k) {
+      const int i = i0 + k;
+      for (int j = 0; j < n; ++j) {
+        u_(j, i) = tau[j][k];
+        gq_all_(j, i) = pack_data_.g_q[j][k];
+        gv_all_(j, i) = pack_data_.g_v[j][k];
+        Mw_all_(j, i) = pack_data_.g_a[j][k];
+      }
+    }
+  }
 }
 
 // forward dynamics: a_i = FD(q_i, v_i, u_i); inverse dynamics: u_i = ID(q_i, v_i, a_i)
@@ -83,6 +116,12 @@ void Ocp::stage_forward(int i) {
 void Ocp::stage_backward(int i, const VecX<double>& gmm_next, Eigen::Ref<VecX<double>> F_i) {
   Data& d = stage_[i];
   const auto q = q_.col(i), v = v_.col(i), a = a_.col(i), u = u_.col(i);
+  if (batched_) {
+    gq_ = gq_all_.col(i);
+    gv_ = gv_all_.col(i);
+    F_i = gmm_next + weights_.Qa.cwiseProduct(a) + Mw_all_.col(i);
+    return;
+  }
   if (formulation_ == Formulation::kInverseDynamics) {
     // w = R u;  gq = (∂ID/∂q)ᵀw,  gv = (∂ID/∂v)ᵀw;  F_i = γ_{i+1} + Q_a a + M w
     w_ = weights_.R.cwiseProduct(u);
@@ -131,10 +170,11 @@ void Ocp::residual(const Eigen::Ref<const VecX<double>>& U, const Eigen::Ref<con
   auto& input = formulation_ == Formulation::kForwardDynamics ? u_ : a_;
   for (int i = 0; i < stages; ++i) {
     input.col(i) = U.segment(i * n, n);
-    stage_forward(i);
+    if (!batched_) stage_forward(i);
     q_.col(i + 1) = q_.col(i) + dtau * v_.col(i);
     v_.col(i + 1) = v_.col(i) + dtau * a_.col(i);
   }
+  if (batched_) batched_stage_dynamics(stages);
   const auto t1 = timing_ ? std::chrono::steady_clock::now() : t0;
 
   // terminal costates (eqs. 16, 18), then the backward sweep (eqs. 22–24)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "idmpc/model/data.hpp"
+#include "idmpc/spatial/pack.hpp"
 
 namespace idmpc {
 
@@ -72,13 +73,23 @@ class Ocp {
                       const Eigen::Ref<const VecX<double>>& a0_previous, double dt,
                       Eigen::Ref<VecX<double>> tau);
 
+  /// @brief ID with adjoints only: evaluate the stage dynamics of kStageLanes stages at once in
+  /// SIMD lanes (the ID rollout is linear in U and its adjoints do not depend on the costates,
+  /// so all stages are independent). On by default; off evaluates stage by stage.
+  void set_stage_batching(bool on) { batched_ = on && batchable(); }
+  bool stage_batching() const { return batched_; }
+
   /// @brief Accumulated timing of residual evaluations (off unless enabled).
   void enable_timing(bool on) { timing_ = on; }
   const OcpTimes& times() const { return times_; }
   void reset_times() { times_ = OcpTimes{}; }
 
  private:
+  bool batchable() const {
+    return formulation_ == Formulation::kInverseDynamics && mode_ == DerivativeMode::kAdjoint;
+  }
   void stage_forward(int i);
+  void batched_stage_dynamics(int stages);
   void stage_backward(int i, const VecX<double>& gmm_next, Eigen::Ref<VecX<double>> F_i);
 
   const Model& model_;
@@ -91,6 +102,10 @@ class Ocp {
   OcpTimes times_;
 
   std::vector<Data> stage_;  ///< one dynamics workspace per stage, kept between the sweeps
+  bool batched_ = false;
+  DataTpl<StagePack> pack_data_;                  ///< workspace of the batched stages
+  VecX<StagePack> qp_, vp_, ap_, wp_;             ///< stage inputs packed in lanes
+  MatX<double> gq_all_, gv_all_, Mw_all_;         ///< batched adjoints, n × N
   Data control_data_;        ///< for the applied torque
   MatX<double> q_, v_, a_, u_;  ///< n × (N+1) states, n × N inputs
   VecX<double> lmd_, gmm_, lmd_next_, gmm_next_;  ///< costates λ, γ (running)

@@ -97,22 +97,22 @@ void TableLayout::draw(const std::vector<Row>& rows, int left, int top) const {
 
 // ------------------------------------------------------------------------------- plot
 
-TimePlot::TimePlot(const std::string& title, double t0, double t1,
-                   std::vector<std::vector<std::array<float, 2>>> curves, std::vector<Rgb> colours)
+TimePlot::TimePlot(const std::string& title, double t0, double t1, std::vector<PlotCurve> curves)
     : fig_(std::make_unique<mjvFigure>()), curves_(std::move(curves)) {
-  if (curves_.size() > static_cast<std::size_t>(mjMAXLINE) || colours.size() < curves_.size()) {
+  if (curves_.size() > static_cast<std::size_t>(mjMAXLINE)) {
     throw std::invalid_argument("TimePlot: expected at most " + std::to_string(mjMAXLINE) +
-                                " curves with a colour each, got " +
-                                std::to_string(curves_.size()) + " curves and " +
-                                std::to_string(colours.size()) + " colours");
+                                " curves, got " + std::to_string(curves_.size()));
   }
-  // keep at most mjMAXLINEPNT samples per curve
+  // curves are drawn as line segments (two points each): at most mjMAXLINEPNT / 2 samples
+  const std::size_t max_samples = static_cast<std::size_t>(mjMAXLINEPNT) / 2;
   for (auto& curve : curves_) {
-    if (curve.size() <= static_cast<std::size_t>(mjMAXLINEPNT)) continue;
+    auto& points = curve.points;
+    if (points.size() <= max_samples) continue;
     std::vector<std::array<float, 2>> thinned;
-    const std::size_t n = static_cast<std::size_t>(mjMAXLINEPNT);
-    for (std::size_t i = 0; i < n; ++i) thinned.push_back(curve[i * (curve.size() - 1) / (n - 1)]);
-    curve.swap(thinned);
+    for (std::size_t i = 0; i < max_samples; ++i) {
+      thinned.push_back(points[i * (points.size() - 1) / (max_samples - 1)]);
+    }
+    points.swap(thinned);
   }
 
   mjvFigure& fig = *fig_;
@@ -120,6 +120,7 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1,
   fig.flg_extend = 0;
   fig.flg_legend = 0;
   fig.flg_selection = 1;
+  fig.flg_barplot = 1;  // GL_LINES: segment pairs, which allows dashes
   fig.flg_ticklabel[0] = 1;
   fig.flg_ticklabel[1] = 1;
   fig.linewidth = 2;
@@ -132,8 +133,10 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1,
   std::snprintf(fig.xformat, sizeof(fig.xformat), "%s", "%.3g");
   std::snprintf(fig.yformat, sizeof(fig.yformat), "%s", "%.3g");
   std::snprintf(fig.minwidth, sizeof(fig.minwidth), "%s", "0000");
+  // mjr_figure draws line 0 last (on top): later curves get lower indices
   for (std::size_t i = 0; i < curves_.size(); ++i) {
-    std::copy(colours[i].begin(), colours[i].end(), fig.linergb[i]);
+    const Rgb& rgb = curves_[i].rgb;
+    std::copy(rgb.begin(), rgb.end(), fig.linergb[curves_.size() - 1 - i]);
   }
 
   // time axis ends on a round tick
@@ -148,7 +151,7 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1,
   // the curves)
   std::vector<float> values;
   for (const auto& curve : curves_) {
-    for (const auto& p : curve) {
+    for (const auto& p : curve.points) {
       if (std::isfinite(p[1])) values.push_back(p[1]);
     }
   }
@@ -167,16 +170,31 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1,
 
 void TimePlot::draw(const mjrRect& viewport, double t, const mjrContext& con) {
   mjvFigure& fig = *fig_;
+  const float ceiling = fig.range[1][1];
   for (std::size_t i = 0; i < curves_.size(); ++i) {
-    int n = 0;
-    for (const auto& p : curves_[i]) {
-      if (p[0] > t + 1e-9) break;
-      fig.linedata[i][2 * n] = p[0];
-      // points above the axis are clipped to it rather than drawn outside the plot
-      fig.linedata[i][2 * n + 1] = std::isfinite(p[1]) ? std::min(p[1], fig.range[1][1]) : p[1];
-      ++n;
+    const PlotCurve& curve = curves_[i];
+    const auto& points = curve.points;
+    // dashes about 8 pixels long, counted in samples
+    int dash = 1;
+    if (curve.dashed && points.size() > 1) {
+      const double sample_dt = (points.back()[0] - points.front()[0]) /
+                               static_cast<double>(points.size() - 1);
+      const double axis = std::max(1e-9, static_cast<double>(fig.range[0][1] - fig.range[0][0]));
+      const double pixels_per_sample = 0.8 * viewport.width * sample_dt / axis;
+      dash = std::max(1, static_cast<int>(std::lround(8 / std::max(pixels_per_sample, 1e-3))));
     }
-    fig.linepnt[i] = n;
+    float* data = fig.linedata[curves_.size() - 1 - i];
+    int n = 0;
+    for (std::size_t j = 0; j + 1 < points.size() && points[j + 1][0] <= t + 1e-9; ++j) {
+      if (curve.dashed && (j / static_cast<std::size_t>(dash)) % 2 == 1) continue;
+      for (const auto& p : {points[j], points[j + 1]}) {
+        // points above the axis are clipped to it rather than drawn outside the plot
+        data[2 * n] = p[0];
+        data[2 * n + 1] = std::min(p[1], ceiling);
+        ++n;
+      }
+    }
+    fig.linepnt[curves_.size() - 1 - i] = n;
   }
   fig.selection = static_cast<float>(t);
   mjr_figure(viewport, &fig, &con);

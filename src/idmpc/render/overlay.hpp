@@ -54,21 +54,25 @@ class TableLayout {
 /// @brief Width in pixels of text in MuJoCo's normal font.
 int text_width(const mjrContext& con, const std::string& text);
 
-/// @brief A plot of sampled curves over a fixed time axis with a moving time cursor.
+/// @brief One curve of a TimePlot: samples (t, value) with t increasing.
+struct PlotCurve {
+  std::vector<std::array<float, 2>> points;
+  Rgb rgb{1, 1, 1};
+  bool dashed = false;  ///< dashes let an identical curve underneath show through
+};
+
+/// @brief A plot of curves over a fixed time axis with a moving time cursor; later curves are
+/// drawn on top of earlier ones.
 class TimePlot {
  public:
-  /// @param title e.g. "|u| [N m]"
-  /// @param t0, t1 time axis
-  /// @param curves per curve its samples (t, value), t increasing
-  /// @param colours one per curve
-  TimePlot(const std::string& title, double t0, double t1,
-           std::vector<std::vector<std::array<float, 2>>> curves, std::vector<Rgb> colours);
+  /// @param title e.g. "|u| [N m]"; t0, t1 the time axis; at most mjMAXLINE curves
+  TimePlot(const std::string& title, double t0, double t1, std::vector<PlotCurve> curves);
   /// @brief Draws the curves up to time t with a cursor at t into `viewport`.
   void draw(const mjrRect& viewport, double t, const mjrContext& con);
 
  private:
   std::unique_ptr<mjvFigure> fig_;  // ~800 kB: on the heap
-  std::vector<std::vector<std::array<float, 2>>> curves_;
+  std::vector<PlotCurve> curves_;
 };
 
 /// @brief A round step (1, 2 or 5 times a power of ten) that cuts `span` into about `parts`.

@@ -99,6 +99,18 @@ CameraSpec parse_camera(const std::string& text) {
   return spec;
 }
 
+// id of the model camera a "fixed:<name>" spec names (-1 for other specs)
+int find_fixed_camera(const mjModel* m, const CameraSpec& spec, const std::string& model_path) {
+  if (spec.kind != CameraSpec::Kind::kFixed) return -1;
+  const int id = mj_name2id(m, mjOBJ_CAMERA, spec.name.c_str());
+  if (id >= 0) return id;
+  std::string names;
+  for (int c = 0; c < m->ncam; ++c) names += (c ? ", " : "") + mj::object_name(m, mjOBJ_CAMERA, c);
+  throw std::invalid_argument("--camera: model '" + model_path + "' has no camera named '" +
+                              spec.name + "'; expected one of: " +
+                              (names.empty() ? std::string("(none)") : names));
+}
+
 // ------------------------------------------------------------------------------- RAII for MuJoCo's visualizer
 
 struct Scene {
@@ -530,6 +542,51 @@ std::vector<ScreenRegion> free_regions(const std::vector<ScreenRegion>& overlays
   return regions;
 }
 
+// the camera: a fixed one of the model, or a free one placed so the whole motion fits in one
+// of the free regions (a planar motion seen square-on, a spatial one from the front left)
+mjvCamera make_camera(const mjModel* m, const CameraSpec& spec, int fixed_camid,
+                      const Motion& motion, const std::vector<ScreenRegion>& regions,
+                      double aspect, FreeCamera& free_cam) {
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  if (spec.kind == CameraSpec::Kind::kFixed) {
+    cam.type = mjCAMERA_FIXED;
+    cam.fixedcamid = fixed_camid;
+    return cam;
+  }
+  double azimuth = kObliqueAzimuth;
+  double elevation = kObliqueElevation;
+  if (spec.kind == CameraSpec::Kind::kOrbit) {
+    azimuth = spec.azimuth;
+    elevation = spec.elevation;
+  } else if (!motion.bodies.empty()) {
+    const Vec3 e = motion.bodies.extent();
+    const double largest = std::max({e[0], e[1], e[2], 1e-6});
+    if (e[1] <= kPlanarTolerance * largest && e[1] <= e[0]) {
+      azimuth = 90;  // motion in xz: look along +y
+      elevation = kAutoElevation;
+    } else if (e[0] <= kPlanarTolerance * largest) {
+      azimuth = 0;  // motion in yz: look along +x
+      elevation = kAutoElevation;
+    }
+  }
+  const double fovy = m->vis.global.fovy;
+  free_cam = fit_camera_best(motion.visible, azimuth, elevation, fovy, aspect, regions);
+  if (free_cam.distance <= 0) {
+    // the overlays leave no room (a tiny video): use the whole frame, let them overlap
+    free_cam = fit_camera(motion.visible, azimuth, elevation, fovy, aspect,
+                          ScreenRegion{-1 + kFrameMargin, 1 - kFrameMargin, -1 + kFrameMargin,
+                                       1 - kFrameMargin});
+  }
+  if (spec.kind == CameraSpec::Kind::kOrbit) free_cam.distance = spec.distance;
+  cam.type = mjCAMERA_FREE;
+  std::copy(free_cam.lookat.begin(), free_cam.lookat.end(), cam.lookat);
+  cam.distance = free_cam.distance;
+  cam.azimuth = free_cam.azimuth;
+  cam.elevation = free_cam.elevation;
+  return cam;
+}
+
 }  // namespace
 
 void check_video_options(const VideoOptions& options) {
@@ -565,19 +622,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   mjModel* m = model.get();
   for (const RunLog& run : runs) check_run_log(run, m, model_path);
   const CameraSpec camera_spec = parse_camera(options.camera);
-  int fixed_camid = -1;
-  if (camera_spec.kind == CameraSpec::Kind::kFixed) {
-    fixed_camid = mj_name2id(m, mjOBJ_CAMERA, camera_spec.name.c_str());
-    if (fixed_camid < 0) {
-      std::string names;
-      for (int c = 0; c < m->ncam; ++c) {
-        names += (c ? ", " : "") + mj::object_name(m, mjOBJ_CAMERA, c);
-      }
-      throw std::invalid_argument("--camera: model '" + model_path + "' has no camera named '" +
-                                  camera_spec.name + "'; expected one of: " +
-                                  (names.empty() ? std::string("(none)") : names));
-    }
-  }
+  const int fixed_camid = find_fixed_camera(m, camera_spec, model_path);
   check_output_writable(out_mp4);
   if (find_on_path("ffmpeg").empty()) {
     throw std::runtime_error("ffmpeg not found on PATH: install the Debian package ffmpeg");
@@ -628,9 +673,12 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   const int margin = std::max(4, options.height / 80);
   const mjrRect table_rect{margin, options.height - margin - table.height(), table.width(),
                            table.height()};
-  std::vector<std::vector<std::array<float, 2>>> curves;
-  for (const Replay& r : replays) curves.push_back(u_curve(r, schedule));
-  TimePlot plot("|u| [N m]", schedule.t0, schedule.t_end, curves, colours);
+  // compare: the second run's curve dashed on top, like its arm's stripe on the first
+  std::vector<PlotCurve> curves;
+  for (std::size_t r = 0; r < replays.size(); ++r) {
+    curves.push_back({u_curve(replays[r], schedule), colours[r], r > 0});
+  }
+  TimePlot plot("|u| [N m]", schedule.t0, schedule.t_end, curves);
   const int plot_w = std::max(24 * con.charWidth[static_cast<unsigned char>('0')],
                               options.width * 30 / 100);
   const int plot_h = std::max(8 * con.charHeight, options.height * 28 / 100);
@@ -644,47 +692,10 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   if (show_table) overlays.push_back(to_ndc(table_rect, options.width, options.height));
   if (show_plot) overlays.push_back(to_ndc(plot_rect, options.width, options.height));
 
-  // camera: a planar motion seen square-on, a spatial one from the front left; the free
-  // camera is placed so the whole motion fits beside the overlays
-  const double aspect = static_cast<double>(options.width) / options.height;
-  mjvCamera cam;
-  mjv_defaultCamera(&cam);
+  // camera
   FreeCamera free_cam;
-  if (camera_spec.kind == CameraSpec::Kind::kFixed) {
-    cam.type = mjCAMERA_FIXED;
-    cam.fixedcamid = fixed_camid;
-  } else {
-    double azimuth = kObliqueAzimuth;
-    double elevation = kObliqueElevation;
-    if (camera_spec.kind == CameraSpec::Kind::kOrbit) {
-      azimuth = camera_spec.azimuth;
-      elevation = camera_spec.elevation;
-    } else if (!motion.bodies.empty()) {
-      const Vec3 e = motion.bodies.extent();
-      const double largest = std::max({e[0], e[1], e[2], 1e-6});
-      if (e[1] <= kPlanarTolerance * largest && e[1] <= e[0]) {
-        azimuth = 90;  // motion in xz: look along +y
-        elevation = kAutoElevation;
-      } else if (e[0] <= kPlanarTolerance * largest) {
-        azimuth = 0;   // motion in yz: look along +x
-        elevation = kAutoElevation;
-      }
-    }
-    const std::vector<ScreenRegion> regions = free_regions(overlays);
-    free_cam = fit_camera_best(motion.visible, azimuth, elevation, m->vis.global.fovy, aspect,
-                               regions);
-    if (free_cam.distance <= 0) {
-      // overlays leave no room (a tiny video): fit the whole frame and let them overlap
-      free_cam = fit_camera(motion.visible, azimuth, elevation, m->vis.global.fovy, aspect,
-                            ScreenRegion{-0.95, 0.95, -0.95, 0.95});
-    }
-    if (camera_spec.kind == CameraSpec::Kind::kOrbit) free_cam.distance = camera_spec.distance;
-    cam.type = mjCAMERA_FREE;
-    std::copy(free_cam.lookat.begin(), free_cam.lookat.end(), cam.lookat);
-    cam.distance = free_cam.distance;
-    cam.azimuth = free_cam.azimuth;
-    cam.elevation = free_cam.elevation;
-  }
+  mjvCamera cam = make_camera(m, camera_spec, fixed_camid, motion, free_regions(overlays),
+                              static_cast<double>(options.width) / options.height, free_cam);
   Vec3 view_forward, view_up, view_right;
   camera_axes(free_cam.azimuth, free_cam.elevation, view_forward, view_up, view_right);
 

@@ -1,0 +1,132 @@
+// idmpc render MODEL --log RUN.csv --out RUN.mp4: replays closed-loop logs off-screen to MP4.
+#include <unistd.h>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "app/commands.hpp"
+
+#ifdef IDMPC_HAVE_RENDER
+#include "idmpc/render/run_log.hpp"
+#include "idmpc/render/video.hpp"
+#include "idmpc/render/video_writer.hpp"
+#endif
+
+namespace idmpc::app {
+namespace {
+
+struct RenderArgs {
+  std::string model;
+  std::string log;
+  std::vector<std::string> compare;
+  std::string out;
+  int width = 1280;
+  int height = 720;
+  double fps = 30;
+  double speed = 1.0;
+  std::string camera = "auto";
+  bool no_overlay = false;
+};
+
+#ifdef IDMPC_HAVE_RENDER
+
+// "rendering x.mp4: 42%" on stderr; redrawn in place on a terminal, every 10% otherwise
+class ProgressPrinter {
+ public:
+  explicit ProgressPrinter(std::string what) : what_(std::move(what)), tty_(isatty(2) != 0) {}
+  void operator()(double fraction) {
+    const int percent = static_cast<int>(fraction * 100 + 1e-9);
+    const int step = tty_ ? 1 : 10;
+    if (percent / step == last_ / step) return;
+    last_ = percent;
+    if (tty_) {
+      std::fprintf(stderr, "\rrendering %s: %3d%%", what_.c_str(), percent);
+      if (percent >= 100) std::fprintf(stderr, "\n");
+    } else {
+      std::fprintf(stderr, "rendering %s: %d%%\n", what_.c_str(), percent);
+    }
+    std::fflush(stderr);
+  }
+
+ private:
+  std::string what_;
+  bool tty_;
+  int last_ = -1;
+};
+
+void run_render(const RenderArgs& args) {
+  // exactly one source of runs
+  if (args.log.empty() == args.compare.empty()) {
+    throw std::invalid_argument(
+        "render: expected exactly one of --log RUN.csv or --compare A.csv B.csv, got " +
+        std::string(args.log.empty() ? "neither" : "both"));
+  }
+  if (!args.compare.empty() && args.compare.size() != 2) {
+    throw std::invalid_argument("--compare: expected two run logs, got " +
+                                std::to_string(args.compare.size()));
+  }
+  render::VideoOptions options;
+  options.width = args.width;
+  options.height = args.height;
+  options.fps = args.fps;
+  options.speed = args.speed;
+  options.camera = args.camera;
+  options.overlay = !args.no_overlay;
+  render::check_video_options(options);
+  render::check_output_writable(args.out);
+
+  std::vector<render::RunLog> runs;
+  if (!args.log.empty()) {
+    runs.push_back(render::read_run_log(args.log));
+  } else {
+    for (const auto& path : args.compare) runs.push_back(render::read_run_log(path));
+  }
+
+  ProgressPrinter printer(args.out);
+  render::render_video(args.model, runs, options, args.out,
+                       [&printer](double f) { printer(f); });
+  std::cout << "wrote " << args.out << " (" << options.width << "x" << options.height << ", "
+            << options.fps << " fps, speed " << options.speed << "x)\n";
+}
+
+#else
+
+void run_render(const RenderArgs&) {
+  throw std::runtime_error("render: this idmpc was built without rendering; expected a build "
+                           "with -DIDMPC_BUILD_RENDER=ON (needs libosmesa6-dev), got it OFF");
+}
+
+#endif
+
+}  // namespace
+
+void register_render(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* sub = app.add_subcommand(
+      "render", "Replay closed-loop run logs in MuJoCo off-screen and encode an MP4 (H.264)");
+  sub->add_option("model", args->model, "MJCF model file the runs were made with")->required();
+  CLI::Option* log = sub->add_option("--log", args->log, "run log CSV written by idmpc swingup");
+  CLI::Option* compare =
+      sub->add_option("--compare", args->compare,
+                      "two run logs overlaid in one scene: the FD run blue, the other an orange core")
+          ->expected(2);
+  log->excludes(compare);
+  sub->add_option("--out,-o", args->out, "output video (.mp4)")->required();
+  sub->add_option("--width", args->width, "video width in pixels (even)")->capture_default_str();
+  sub->add_option("--height", args->height, "video height in pixels (even)")
+      ->capture_default_str();
+  sub->add_option("--fps", args->fps, "video frames per second")->capture_default_str();
+  sub->add_option("--speed", args->speed, "playback speed (log seconds per video second)")
+      ->capture_default_str();
+  sub->add_option("--camera", args->camera,
+                  "auto | fixed:<model camera> | azimuth,elevation,distance (deg, deg, m)")
+      ->capture_default_str();
+  sub->add_flag("--no-overlay", args->no_overlay, "no text table and |u| plot over the scene");
+  sub->callback([args] { run_render(*args); });
+}
+
+}  // namespace idmpc::app
