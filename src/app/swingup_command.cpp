@@ -1,16 +1,22 @@
-// idmpc swingup MODEL: one closed-loop run of the paper's swing-up, with log and summary.
+// idmpc swingup MODEL: one closed-loop run of the paper's swing-up, with log, summary and video.
+#include <cstdio>
+#include <filesystem>
 #include <iostream>
+#include <unistd.h>
 
-#include "app/commands.hpp"
 #include "app/atomic_file.hpp"
+#include "app/commands.hpp"
 #include "app/swingup.hpp"
+#ifdef IDMPC_HAVE_RENDER
+#include "idmpc/render/video.hpp"
+#endif
 
 namespace idmpc::app {
 
 void register_swingup(CLI::App& app) {
   struct Options {
     SwingupOptions run;
-    std::string log, summary;
+    std::string log, summary, video;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("swingup", "Closed-loop swing-up by C/GMRES (FD or ID) with MuJoCo in the loop");
@@ -18,15 +24,45 @@ void register_swingup(CLI::App& app) {
   add_swingup_options(*sub, opt->run);
   sub->add_option("--log", opt->log, "CSV log, one row per control step");
   sub->add_option("--summary", opt->summary, "JSON summary");
+  sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)");
   sub->callback([opt] {
-    if (!opt->summary.empty()) {
-      AtomicFile probe(opt->summary);  // fail on an unwritable path before the run
-    }
-    SwingupOutcome out = run_swingup(opt->run, opt->log);
+    // fail on unwritable paths before the run
+    if (!opt->summary.empty()) AtomicFile probe(opt->summary);
+#ifndef IDMPC_HAVE_RENDER
+    if (!opt->video.empty()) throw std::runtime_error("--video: this build has no renderer (IDMPC_BUILD_RENDER=OFF)");
+#else
+    if (!opt->video.empty()) AtomicFile probe(opt->video);
+#endif
+    // a video needs a log: without --log, a temporary one beside the video
+    std::string log = opt->log;
+    const bool temporary_log = log.empty() && !opt->video.empty();
+    if (temporary_log) log = opt->video + ".log." + std::to_string(::getpid()) + ".csv";
+    SwingupOutcome out = run_swingup(opt->run, log);
     if (!opt->summary.empty()) write_json(out.summary, opt->summary);
     std::cout << human_summary(out.summary);
     if (!opt->log.empty()) std::cout << "  log: " << opt->log << "\n";
     if (!opt->summary.empty()) std::cout << "  summary: " << opt->summary << "\n";
+    std::cout << std::flush;
+#ifdef IDMPC_HAVE_RENDER
+    if (!opt->video.empty()) {
+      struct Cleanup {
+        std::string path;
+        ~Cleanup() { if (!path.empty()) std::remove(path.c_str()); }
+      } cleanup{temporary_log ? log : ""};
+      render::RunLog run = render::read_run_log(log);
+      const std::string f = out.summary["formulation"] == "fd" ? "FD" : "ID";
+      run.formulation = out.summary["formulation"].get<std::string>();
+      run.derivatives = out.summary["derivatives"].get<std::string>();
+      run.label = "C/GMRES (" + f + ", " + out.summary["derivatives"].get<std::string>() + ") N=" +
+                  std::to_string(out.summary["N"].get<int>()) + " kmax=" +
+                  std::to_string(out.summary["kmax"].get<int>());
+      render::render_video(opt->run.model, {run}, render::VideoOptions{}, opt->video, [](double frac) {
+        std::fprintf(stderr, "\rrendering %3.0f%%", 100 * frac);
+        if (frac >= 1) std::fprintf(stderr, "\n");
+      });
+      std::cout << "  video: " << opt->video << "\n";
+    }
+#endif
   });
 }
 

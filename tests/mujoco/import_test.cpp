@@ -1,0 +1,533 @@
+// The MuJoCo boundary: loader and importer errors name what is wrong, the unmodeled report,
+// option flags (gravity, passive), welded-body merging, several joints in one body, and the
+// plant's torque → ctrl scaling.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/mujoco/check.hpp"
+#include "idmpc/mujoco/import.hpp"
+#include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/plant.hpp"
+#include "idmpc/mujoco/reference.hpp"
+#include "support/random_model.hpp"
+#include "support/test_models.hpp"
+
+namespace idmpc {
+namespace {
+
+// ID/FD against MuJoCo: the same arithmetic up to rounding (as CheckTolerances::mujoco)
+constexpr double kMujoco = 1e-10;
+// (v₁ − v₀)/Δt vs qacc: Euler's v₁ = v₀ + Δt·qacc rounded, error ≈ ε·|v₀|/Δt ≈ 1e-12
+constexpr double kPlantAcceleration = 1e-10;
+// summed body masses: a handful of additions of O(1) numbers
+constexpr double kMassSum = 1e-12;
+
+std::string joined(const std::vector<std::string>& lines) {
+  std::string out;
+  for (const std::string& l : lines) out += "\n  " + l;
+  return out;
+}
+
+/// runs `call`, expects exception E whose message contains every one of `parts`
+template <typename E>
+void expect_throw_naming(const std::function<void()>& call,
+                         std::initializer_list<std::string> parts) {
+  try {
+    call();
+    ADD_FAILURE() << "expected an exception naming:" << joined(std::vector<std::string>(parts));
+  } catch (const E& e) {
+    const std::string what = e.what();
+    for (const std::string& p : parts) {
+      EXPECT_NE(what.find(p), std::string::npos) << "message lacks '" << p << "': " << what;
+    }
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+  }
+}
+
+VecX<double> random_vector(std::mt19937& rng, int n, double scale) {
+  std::uniform_real_distribution<double> u(-scale, scale);
+  VecX<double> x(n);
+  for (int i = 0; i < n; ++i) x[i] = u(rng);
+  return x;
+}
+
+double rel(const VecX<double>& x, const VecX<double>& y) {
+  return mj::relative_error(x, y);
+}
+
+/// a MuJoCo warning anywhere in a test fails it
+class ImportTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    mj::install_error_handlers();
+    const std::vector<std::string> stale = mj::take_warnings();
+    ASSERT_TRUE(stale.empty()) << "MuJoCo warnings before the test:" << joined(stale);
+  }
+  void TearDown() override {
+    const std::vector<std::string> warnings = mj::take_warnings();
+    EXPECT_TRUE(warnings.empty()) << "MuJoCo warnings:" << joined(warnings);
+  }
+
+  /// every check_model comparison passes at a few states
+  static void expect_check_model_ok(const mjModel* m, const Model& model, const std::string& label) {
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      for (const mj::CheckEntry& e : mj::check_model(m, model, 3, seed)) {
+        EXPECT_TRUE(e.ok()) << label << " seed " << seed << ": " << e.quantity << " worst "
+                            << e.worst << " > tolerance " << e.tolerance;
+      }
+    }
+  }
+};
+
+// a three-link chain (hinge, slide, hinge) with masses on every link; `option`, `actuators`
+// and attributes for every joint are spliced in
+std::string chain_mjcf(const std::string& option, const std::string& actuators,
+                       const std::string& joint_attributes = "") {
+  return R"(<mujoco model="chain3">
+  <option timestep="0.001">)" + option + R"(</option>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <body name="link0" pos="0 0 1">
+      <joint name="j0" type="hinge" axis="0 1 0" )" + joint_attributes + R"(/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04" mass="1"/>
+      <body name="link1" pos="0.4 0 0" euler="0.2 0.1 0">
+        <joint name="j1" type="slide" axis="1 0.3 0.1" )" + joint_attributes + R"(/>
+        <geom type="box" pos="0.1 0 0" size="0.1 0.05 0.05" mass="0.7"/>
+        <body name="link2" pos="0.2 0 0">
+          <joint name="j2" type="hinge" pos="0.01 0 0" axis="0.3 0.2 1" )" + joint_attributes + R"(/>
+          <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.03" mass="0.5"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <actuator>)" + actuators + R"(</actuator>
+</mujoco>
+)";
+}
+
+// ---------------------------------------------------------------------------------------------
+// loader errors
+
+TEST_F(ImportTest, MissingFileThrowsNamingThePath) {
+  const std::string path = "/nonexistent/idmpc/no_such_model.xml";
+  expect_throw_naming<std::runtime_error>([&] { mj::load_model(path); }, {path});
+}
+
+TEST_F(ImportTest, MalformedXmlThrowsNamingTheFile) {
+  const std::string path = ::testing::TempDir() + "idmpc_import_test_malformed.xml";
+  {
+    std::ofstream out(path);
+    out << "<mujoco><worldbody><body name=\"b\"><geom size=\"0.1\"/></worldbody></mujoco>\n";
+  }
+  expect_throw_naming<std::runtime_error>([&] { mj::load_model(path); }, {path});
+  std::remove(path.c_str());
+  // text that is XML but not MJCF fails as well
+  expect_throw_naming<std::runtime_error>(
+      [] { mj::load_model_from_string("<mujoco><worldbody><body><joint type=\"bogus\"/></body></worldbody></mujoco>"); },
+      {"cannot load model"});
+}
+
+// ---------------------------------------------------------------------------------------------
+// importer errors
+
+TEST_F(ImportTest, BallJointIsRejectedNamingJointAndBody) {
+  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco>
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="hinge0" type="hinge" axis="0 1 0"/>
+      <geom type="sphere" size="0.1" mass="1"/>
+      <body name="forearm" pos="0.3 0 0">
+        <joint name="shoulder_ball" type="ball"/>
+        <geom type="sphere" size="0.1" mass="1"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)");
+  expect_throw_naming<std::invalid_argument>(
+      [&] { mj::import_model(m.get(), "ball.xml"); },
+      {"shoulder_ball", "forearm", "ball", "ball.xml"});
+}
+
+TEST_F(ImportTest, FreeJointIsRejectedNamingJointAndBody) {
+  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco>
+  <worldbody>
+    <body name="floating_base" pos="0 0 1">
+      <joint name="float" type="free"/>
+      <geom type="sphere" size="0.1" mass="1"/>
+    </body>
+  </worldbody>
+</mujoco>)");
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "free.xml"); },
+                                             {"float", "floating_base", "free", "free.xml"});
+}
+
+TEST_F(ImportTest, UnderActuatedModelIsRejectedNamingTheBareJoint) {
+  const mj::ModelPtr m = mj::load_model_from_string(
+      chain_mjcf("", R"(<motor name="m0" joint="j0"/><motor name="m2" joint="j2"/>)"));
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "under.xml"); },
+                                             {"under-actuated", "'j1'", "link1", "under.xml"});
+}
+
+TEST_F(ImportTest, NonMotorActuatorIsRejectedUnlessTorquesAreDirect) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor name="m0" joint="j0"/><position name="servo1" joint="j1" kp="20"/>
+             <motor name="m2" joint="j2"/>)"));
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "servo.xml"); },
+                                             {"servo1", "motor", "servo.xml"});
+  const mj::ImportedModel imported = mj::import_model(m.get(), "servo.xml", mj::ImportOptions{true});
+  EXPECT_TRUE(imported.actuation.direct);
+  EXPECT_EQ(imported.model.n, 3);
+}
+
+TEST_F(ImportTest, TendonActuatorIsRejected) {
+  std::string xml = chain_mjcf("", R"(<motor name="m0" joint="j0"/><motor name="m1" joint="j1"/>
+             <motor name="m2" joint="j2"/><motor name="pull" tendon="t"/>)");
+  xml.insert(xml.find("<actuator>"), R"(<tendon><fixed name="t"><joint joint="j0" coef="1"/>
+    <joint joint="j2" coef="-1"/></fixed></tendon>)");
+  const mj::ModelPtr m = mj::load_model_from_string(xml);
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "tendon.xml"); },
+                                             {"pull", "does not act on a joint", "tendon.xml"});
+}
+
+TEST_F(ImportTest, TwoMotorsOnOneJointAreRejected) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor name="m0" joint="j0"/><motor name="m0_again" joint="j0"/>
+             <motor name="m1" joint="j1"/><motor name="m2" joint="j2"/>)"));
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "twice.xml"); },
+                                             {"m0_again", "'j0'", "link0", "twice.xml"});
+}
+
+TEST_F(ImportTest, NoActuatorsMeansDirectTorques) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf("", ""));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "bare.xml");
+  EXPECT_TRUE(imported.actuation.direct);
+  EXPECT_EQ(imported.model.n, 3);
+}
+
+TEST_F(ImportTest, MotorsMapToTheirJointsWithGainTimesGear) {
+  // listed out of dof order, with a general fixed-gain actuator among them
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor name="m2" joint="j2" gear="2.5"/><motor name="m0" joint="j0" gear="0.5"/>
+             <general name="g1" joint="j1" gainprm="4" gear="2.5"/>)"));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "motors.xml");
+  ASSERT_FALSE(imported.actuation.direct);
+  EXPECT_EQ(imported.actuation.actuator_of_dof, (std::vector<int>{1, 2, 0}));
+  ASSERT_EQ(imported.actuation.ctrl_per_torque.size(), 3u);
+  EXPECT_DOUBLE_EQ(imported.actuation.ctrl_per_torque[0], 1 / 0.5);
+  EXPECT_DOUBLE_EQ(imported.actuation.ctrl_per_torque[1], 1 / (4 * 2.5));
+  EXPECT_DOUBLE_EQ(imported.actuation.ctrl_per_torque[2], 1 / 2.5);
+}
+
+// ---------------------------------------------------------------------------------------------
+// what the controller's model leaves out
+
+TEST_F(ImportTest, UnmodeledReportListsLimitsContactsTendonsFrictionAndEqualities) {
+  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco>
+  <worldbody>
+    <geom name="floor" type="plane" size="2 2 0.1"/>
+    <body name="arm" pos="0 0 1">
+      <joint name="shoulder" type="hinge" axis="0 1 0" limited="true" range="-1 1"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04" mass="1"/>
+      <body name="hand" pos="0.4 0 0">
+        <joint name="wrist" type="hinge" axis="0 1 0" frictionloss="0.1"/>
+        <geom type="sphere" size="0.05" mass="0.3"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon><fixed name="coupling"><joint joint="shoulder" coef="1"/><joint joint="wrist" coef="1"/></fixed></tendon>
+  <equality><joint joint1="shoulder" joint2="wrist"/></equality>
+</mujoco>)");
+  const mj::ImportedModel imported = mj::import_model(m.get(), "unmodeled.xml");
+  const std::string report = joined(imported.unmodeled);
+  EXPECT_NE(report.find("contacts"), std::string::npos) << report;
+  EXPECT_NE(report.find("limit on joint 'shoulder' of body 'arm'"), std::string::npos) << report;
+  EXPECT_EQ(report.find("limit on joint 'wrist'"), std::string::npos) << report;
+  EXPECT_NE(report.find("friction loss on joint 'wrist'"), std::string::npos) << report;
+  EXPECT_NE(report.find("1 tendon"), std::string::npos) << report;
+  EXPECT_NE(report.find("1 equality"), std::string::npos) << report;
+  EXPECT_EQ(imported.unmodeled.size(), 5u) << report;
+}
+
+TEST_F(ImportTest, UnmodeledReportListsActuatorRangesOnlyWhenMotorsAreUsed) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor name="m0" joint="j0" ctrllimited="true" ctrlrange="-1 1"/>
+             <motor name="m1" joint="j1" forcelimited="true" forcerange="-5 5"/>
+             <motor name="m2" joint="j2"/>)"));
+  const mj::ImportedModel motors = mj::import_model(m.get(), "ranges.xml");
+  const std::string report = joined(motors.unmodeled);
+  EXPECT_NE(report.find("control range of actuator 'm0'"), std::string::npos) << report;
+  EXPECT_NE(report.find("force range of actuator 'm1'"), std::string::npos) << report;
+  EXPECT_EQ(motors.unmodeled.size(), 2u) << report;
+  // torques applied directly bypass the actuators and their ranges
+  EXPECT_TRUE(mj::import_model(m.get(), "ranges.xml", mj::ImportOptions{true}).unmodeled.empty());
+}
+
+TEST_F(ImportTest, ShippedAndRandomModelsHaveNothingUnmodeled) {
+  // they are written for the controller: no contacts, limits or tendons
+  for (const std::string& path : test::shipped_model_paths()) {
+    const mj::ModelPtr m = mj::load_model(path);
+    const mj::ImportedModel imported = mj::import_model(m.get(), path);
+    EXPECT_TRUE(imported.unmodeled.empty()) << path << ":" << joined(imported.unmodeled);
+  }
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    const mj::ModelPtr m = mj::load_model_from_string(test::random_tree_mjcf(seed));
+    const mj::ImportedModel imported = mj::import_model(m.get(), "random tree");
+    EXPECT_TRUE(imported.unmodeled.empty()) << "seed " << seed << ":" << joined(imported.unmodeled);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// option flags
+
+TEST_F(ImportTest, DisabledGravityGivesZeroGravityAndMatchesMujoco) {
+  const mj::ModelPtr m = mj::load_model_from_string(
+      chain_mjcf(R"(<flag gravity="disable"/>)", "", R"(damping="0.2" armature="0.05")"));
+  const Model model = mj::import_model(m.get(), "no_gravity.xml").model;
+  EXPECT_EQ(model.gravity, Vec3<double>::Zero());
+  Data data(model);
+  mj::Reference ref(m.get());
+  std::mt19937 rng(7);
+  for (int k = 0; k < 5; ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    const VecX<double> q = model.q_ref + random_vector(rng, 3, 3.0),
+                       v = random_vector(rng, 3, 2.0), a = random_vector(rng, 3, 5.0);
+    EXPECT_LE(rel(rnea(model, data, q, v, a), ref.inverse(q, v, a)), kMujoco);
+    // at rest with no acceleration nothing needs holding
+    const VecX<double> zero = VecX<double>::Zero(3);
+    EXPECT_LE(rnea(model, data, q, zero, zero).cwiseAbs().maxCoeff(), kMujoco);
+  }
+  expect_check_model_ok(m.get(), model, "no_gravity");
+}
+
+TEST_F(ImportTest, TiltedGravityMatchesMujoco) {
+  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco>
+  <option gravity="1.5 -2 -7"/>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <body name="link0" pos="0 0 1" euler="0.3 0.2 0.1">
+      <joint name="j0" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04" mass="1"/>
+      <body name="link1" pos="0.4 0 0">
+        <joint name="j1" type="slide" axis="1 0 0.5"/>
+        <geom type="sphere" pos="0.1 0 0" size="0.05" mass="0.6"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)");
+  const Model model = mj::import_model(m.get(), "tilted.xml").model;
+  EXPECT_EQ(model.gravity, Vec3<double>(1.5, -2, -7));
+  expect_check_model_ok(m.get(), model, "tilted");
+}
+
+TEST_F(ImportTest, DisabledPassiveForcesZeroDampingAndStiffness) {
+  const std::string joints = R"(damping="0.7" stiffness="3" springref="0.2" armature="0.05")";
+  const mj::ModelPtr with = mj::load_model_from_string(chain_mjcf("", "", joints));
+  const Model model_with = mj::import_model(with.get(), "passive.xml").model;
+  // the flag is what zeroes them
+  EXPECT_GT(model_with.damping.minCoeff(), 0.0);
+  EXPECT_GT(model_with.stiffness.minCoeff(), 0.0);
+
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(R"(<flag passive="disable"/>)", "", joints));
+  const Model model = mj::import_model(m.get(), "no_passive.xml").model;
+  EXPECT_EQ(model.damping, VecX<double>::Zero(3));
+  EXPECT_EQ(model.stiffness, VecX<double>::Zero(3));
+  EXPECT_EQ(model.armature, model_with.armature);  // armature is inertia, not a passive force
+  Data data(model);
+  mj::Reference ref(m.get());
+  std::mt19937 rng(8);
+  for (int k = 0; k < 5; ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    const VecX<double> q = model.q_ref + random_vector(rng, 3, 3.0),
+                       v = random_vector(rng, 3, 2.0), a = random_vector(rng, 3, 5.0),
+                       tau = random_vector(rng, 3, 5.0);
+    EXPECT_LE(rel(rnea(model, data, q, v, a), ref.inverse(q, v, a)), kMujoco);
+    EXPECT_LE(rel(aba(model, data, q, v, tau), ref.forward(q, v, tau)), kMujoco);
+  }
+  expect_check_model_ok(m.get(), model, "no_passive");
+}
+
+// ---------------------------------------------------------------------------------------------
+// the tree
+
+/// the masses each link must carry: every body welded to a jointed body, summed, on the last
+/// link of that body's joints; bodies welded to the world carry nothing
+void expect_welded_masses_merged(const mjModel* m, const Model& model, const std::string& label) {
+  SCOPED_TRACE(label);
+  VecX<double> expected = VecX<double>::Zero(model.n);
+  double total = 0;
+  for (int b = 1; b < m->nbody; ++b) {
+    const int weld = m->body_weldid[b];
+    if (weld == 0) continue;
+    ASSERT_GT(m->body_jntnum[weld], 0);
+    const int last_dof = m->jnt_dofadr[m->body_jntadr[weld] + m->body_jntnum[weld] - 1];
+    expected[last_dof] += m->body_mass[b];
+    total += m->body_mass[b];
+  }
+  double links = 0;
+  for (int i = 0; i < model.n; ++i) {
+    EXPECT_NEAR(model.I[i].m, expected[i], kMassSum) << "link " << i << " ('"
+                                                       << model.joint_names[i] << "')";
+    links += model.I[i].m;
+  }
+  EXPECT_NEAR(links, total, kMassSum * m->nbody);
+}
+
+TEST_F(ImportTest, WeldedBodyMassesMergeIntoTheirLinks) {
+  for (const std::string& path : test::shipped_model_paths()) {
+    const mj::ModelPtr m = mj::load_model(path);
+    expect_welded_masses_merged(m.get(), mj::import_model(m.get(), path).model, path);
+  }
+  for (unsigned seed = 1; seed <= 50; ++seed) {
+    const mj::ModelPtr m = mj::load_model_from_string(test::random_tree_mjcf(seed));
+    expect_welded_masses_merged(m.get(), mj::import_model(m.get(), "random tree").model,
+                                "random tree seed " + std::to_string(seed));
+  }
+}
+
+TEST_F(ImportTest, WeldedBodiesOnTheWorldCarryNothing) {
+  // a heavy jointless body on the world, and one between the world and a jointed body
+  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco>
+  <worldbody>
+    <body name="stand" pos="0 0 0.5"><geom type="box" size="0.1 0.1 0.5" mass="50"/></body>
+    <body name="mount" pos="0 0 1" euler="0.3 0 0">
+      <geom type="box" size="0.05 0.05 0.05" mass="5"/>
+      <body name="arm" pos="0 0.1 0">
+        <joint name="shoulder" type="hinge" axis="1 0 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0.4 0" size="0.03" mass="1.25"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)");
+  const Model model = mj::import_model(m.get(), "stand.xml").model;
+  ASSERT_EQ(model.n, 1);
+  EXPECT_NEAR(model.I[0].m, 1.25, kMassSum);
+  expect_check_model_ok(m.get(), model, "stand");
+}
+
+constexpr const char* kMultiJointBody = R"(<mujoco model="multi_joint">
+  <option timestep="0.001"><flag contact="disable"/></option>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <body name="base" pos="0.1 0.2 1" quat="0.9 0.1 0.3 -0.2">
+      <joint name="a" type="hinge" pos="0.05 0 0.02" axis="1 0.2 0.1" damping="0.1"/>
+      <joint name="b" type="slide" pos="-0.03 0.04 0" axis="0.1 1 0.3" stiffness="2"
+             springref="0.1"/>
+      <joint name="c" type="hinge" pos="0 -0.05 0.1" axis="0.3 -0.2 1" armature="0.02"
+             ref="0.3"/>
+      <inertial pos="0.1 0.02 -0.03" quat="0.8 0.2 0.1 0.3" mass="1.5"
+                diaginertia="0.03 0.02 0.015"/>
+      <body name="tip" pos="0.3 0 0" euler="0.2 0.1 0">
+        <joint name="d" type="hinge" pos="0.02 0.01 0" axis="0 1 0.2"/>
+        <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.03" mass="0.5"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)";
+
+TEST_F(ImportTest, SeveralJointsInOneBodyMatchMujoco) {
+  const mj::ModelPtr m = mj::load_model_from_string(kMultiJointBody);
+  const Model model = mj::import_model(m.get(), "multi_joint.xml").model;
+  ASSERT_EQ(model.n, 4);
+  EXPECT_EQ(model.parent, (std::vector<int>{-1, 0, 1, 2}));
+  EXPECT_EQ(model.joint_type[1], JointType::kPrismatic);
+  // the body's inertia sits on its last joint's link
+  EXPECT_EQ(model.I[0].m, 0.0);
+  EXPECT_EQ(model.I[1].m, 0.0);
+  EXPECT_NEAR(model.I[2].m, 1.5, kMassSum);
+  expect_check_model_ok(m.get(), model, "multi_joint");
+}
+
+// ---------------------------------------------------------------------------------------------
+// the plant: a torque τ reaches MuJoCo as exactly τ
+
+constexpr const char* kPlantJoints = R"(
+      <joint name="j0" type="hinge" axis="0 1 0.2" stiffness="1" springref="0.1"/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 -0.1" size="0.04" mass="1"/>
+      <body name="l1" pos="0.4 0 -0.1" euler="0.2 0 0.1">
+        <joint name="j1" type="slide" axis="1 0.3 0.1" armature="0.1"/>
+        <geom type="box" pos="0.1 0 0" size="0.1 0.05 0.05" mass="0.7"/>
+        <body name="l2" pos="0.2 0 0">
+          <joint name="j2" type="hinge" pos="0.01 0 0" axis="0.3 0.2 1"/>
+          <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.03" mass="0.5"/>
+        </body>
+      </body>)";
+
+// no damping: MuJoCo's Euler integrator would treat it implicitly, and v₁ − v₀ ≠ Δt·qacc
+std::string plant_mjcf(const std::string& actuators) {
+  return std::string(R"(<mujoco model="plant">
+  <option timestep="0.002" integrator="Euler"><flag contact="disable"/></option>
+  <default><geom contype="0" conaffinity="0"/></default>
+  <worldbody>
+    <body name="l0" pos="0 0 1">)") + kPlantJoints + R"(
+    </body>
+  </worldbody>
+  <actuator>)" + actuators + R"(</actuator>
+</mujoco>)";
+}
+
+/// one plant step from random states: (v₁ − v₀)/Δt equals MuJoCo's qacc under qfrc_applied = τ
+void expect_plant_applies_torques(const mjModel* m, const mj::Actuation& actuation,
+                                  const std::string& label) {
+  SCOPED_TRACE(label);
+  mj::Plant plant(m, actuation);
+  mj::Reference ref(m);
+  const int n = m->nv;
+  const Eigen::Map<const VecX<double>> qpos0(m->qpos0, m->nq);
+  std::mt19937 rng(11);
+  for (int k = 0; k < 5; ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    const VecX<double> q = qpos0 + random_vector(rng, n, 1.0), v = random_vector(rng, n, 1.0),
+                       tau = random_vector(rng, n, 5.0);
+    plant.reset(q, v);
+    std::string reason;
+    ASSERT_TRUE(plant.step(tau, &reason)) << reason;
+    const VecX<double> qacc = (plant.v() - v) / plant.timestep();
+    EXPECT_LE(rel(qacc, ref.forward(q, v, tau)), kPlantAcceleration)
+        << "plant " << qacc.transpose() << "\nreference " << ref.forward(q, v, tau).transpose();
+  }
+}
+
+TEST_F(ImportTest, PlantWithDirectTorquesAppliesTau) {
+  const mj::ModelPtr m = mj::load_model_from_string(plant_mjcf(""));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml");
+  ASSERT_TRUE(imported.actuation.direct);
+  expect_plant_applies_torques(m.get(), imported.actuation, "no actuators");
+}
+
+TEST_F(ImportTest, PlantWithDirectTorquesIgnoresTheModelsServos) {
+  const mj::ModelPtr m = mj::load_model_from_string(plant_mjcf(
+      R"(<position joint="j0" kp="50"/><position joint="j1" kp="50"/><velocity joint="j2" kv="3"/>)"));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml", mj::ImportOptions{true});
+  ASSERT_TRUE(imported.actuation.direct);
+  expect_plant_applies_torques(m.get(), imported.actuation, "servos, direct torques");
+}
+
+TEST_F(ImportTest, PlantWithGearedMotorsScalesCtrl) {
+  const mj::ModelPtr m = mj::load_model_from_string(plant_mjcf(
+      R"(<motor joint="j2" gear="2.5"/><motor joint="j0" gear="2.5"/><motor joint="j1" gear="2.5"/>)"));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml");
+  ASSERT_FALSE(imported.actuation.direct);
+  expect_plant_applies_torques(m.get(), imported.actuation, "motors with gear 2.5");
+}
+
+TEST_F(ImportTest, PlantWithMixedGainsAndGearsScalesCtrl) {
+  const mj::ModelPtr m = mj::load_model_from_string(plant_mjcf(
+      R"(<motor joint="j1" gear="0.4"/><general joint="j2" gainprm="3" gear="2.5"/>
+         <motor joint="j0" gear="-1.5"/>)"));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml");
+  ASSERT_FALSE(imported.actuation.direct);
+  expect_plant_applies_torques(m.get(), imported.actuation, "mixed gains and gears");
+}
+
+}  // namespace
+}  // namespace idmpc
