@@ -112,7 +112,7 @@ void register_render(CLI::App& app) {
   CLI::Option* log = sub->add_option("--log", args->log, "run log CSV written by idmpc swingup");
   CLI::Option* compare =
       sub->add_option("--compare", args->compare,
-                      "two run logs overlaid in one scene: the FD run blue, the other an orange core")
+                      "two run logs in one scene: the FD run blue, the other an orange core")
           ->expected(2);
   log->excludes(compare);
   sub->add_option("--out,-o", args->out, "output video (.mp4)")->required();

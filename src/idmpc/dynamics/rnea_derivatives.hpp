@@ -18,6 +18,22 @@
 
 namespace idmpc {
 
+/// @brief B = [v]×*·I − I·[v]× + [h]‾ (h = I v) in 3×3 blocks: with W = [ω]×, V = [v_lin]×,
+/// H = [m c]×, N = [h_ang]×, F = [h_lin]× and the symmetry of Ibar, three 3×3 products suffice.
+template <typename S>
+Mat6<S> coriolis_matrix(const Inertia<S>& I, const Vec6<S>& v, const Vec6<S>& h) {
+  const Mat3<S> W = skew<S>(v.template head<3>()), V = skew<S>(v.template tail<3>());
+  const Mat3<S> H = skew<S>(I.h), N = skew<S>(h.template head<3>()), F = skew<S>(h.template tail<3>());
+  const Mat3<S> WI = W * I.Ibar, VH = V * H, WH = W * H;
+  const Mat3<S> TR = WH - WH.transpose() + I.m * V;
+  Mat6<S> B;
+  B.template topLeftCorner<3, 3>() = WI + WI.transpose() - VH - VH.transpose() - N;
+  B.template topRightCorner<3, 3>() = TR - F;
+  B.template bottomLeftCorner<3, 3>() = -TR - F;
+  B.template bottomRightCorner<3, 3>().setZero();
+  return B;
+}
+
 /// @brief Fills data.dtau_dq, data.dtau_dv, data.M (= ∂τ/∂a) and data.tau at (q, v, a).
 template <typename S, typename Q, typename Vv, typename Aa>
 void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
@@ -36,9 +52,7 @@ void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixB
     data.oI[i] = cast_inertia<S>(model.I[i]).transformed_to_parent(data.oX[i]);
     const Vec6<S> h = data.oI[i].apply(data.oV[i]);
     data.oF[i] = data.oI[i].apply(data.oA[i]) + cross_force<S>(data.oV[i], h);
-    const Mat6<S> I6 = data.oI[i].matrix();
-    data.oB[i] = cross_force_matrix<S>(data.oV[i]) * I6 - I6 * cross_motion_matrix<S>(data.oV[i]) +
-                 cross_force_bar_matrix<S>(h);
+    data.oB[i] = coriolis_matrix<S>(data.oI[i], data.oV[i], h);
   }
   // backward pass: composite inertias, Coriolis matrices and subtree forces
   for (int i = n - 1; i >= 0; --i) {

@@ -3,10 +3,7 @@
 /// @brief Per-thread workspace of the dynamics algorithms. Every buffer is allocated here;
 /// the algorithms never allocate.
 
-#include <type_traits>
 #include <vector>
-
-#include <Eigen/Cholesky>
 
 #include "idmpc/model/model.hpp"
 
@@ -23,7 +20,7 @@ template <typename S> struct DataTpl {
         Ic(n), M(MatX<S>::Zero(n, n)),
         oX(n), oS(n), oV(n), oA(n), oI(n), oB(n), oF(n), IcS(n), BcS(n), psi(n), w(n), G(n), H(n),
         dtau_dq(MatX<S>::Zero(n, n)), dtau_dv(MatX<S>::Zero(n, n)),
-        Minv(MatX<S>::Zero(n, n)), llt(n), da_dq(MatX<S>::Zero(n, n)),
+        Minv(MatX<S>::Zero(n, n)), da_dq(MatX<S>::Zero(n, n)),
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
@@ -59,8 +56,6 @@ template <typename S> struct DataTpl {
 
   // forward-dynamics derivatives
   MatX<S> Minv;
-  /// Cholesky of M, only for real scalars (a SIMD pack has no pivots to compare)
-  std::conditional_t<std::is_same_v<S, double>, Eigen::LLT<MatX<double>>, int> llt;
   MatX<S> da_dq, da_dv;
 
   // RNEA vector–Jacobian products: adjoints of body force, acceleration, velocity

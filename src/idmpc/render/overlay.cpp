@@ -158,7 +158,8 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1, std::vector<P
   double top = 1;
   if (!values.empty()) {
     std::sort(values.begin(), values.end());
-    const double p = values[static_cast<std::size_t>(0.995 * static_cast<double>(values.size() - 1))];
+    const auto high = static_cast<std::size_t>(0.995 * static_cast<double>(values.size() - 1));
+    const double p = values[high];
     if (p > 0) top = 1.05 * p;
   }
   const double y_step = nice_step(top, 4);

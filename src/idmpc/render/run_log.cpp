@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -44,7 +43,7 @@ int count_indexed(const std::vector<std::string>& cols, std::size_t at, const st
   return k;
 }
 
-// the column layout of a header, or an error message
+// the column layout of a header: n joint columns per q and v, nu torque columns
 struct Layout {
   int n = 0;
   int nu = 0;
@@ -68,11 +67,9 @@ bool parse_number(const std::string& text, double& value) {
   if (text.empty()) return false;
   const char* begin = text.c_str();
   char* end = nullptr;
-  errno = 0;
   value = std::strtod(begin, &end);
-  if (end != begin + text.size()) return false;
-  // overflow to +-inf is kept (a diverged run); underflow to 0 is harmless
-  return true;
+  // nan, inf and overflow to +-inf are kept: a diverged run logs them
+  return end == begin + text.size();
 }
 
 // a field of the summary, at the top level or one object deep (e.g. {"controller": {...}})

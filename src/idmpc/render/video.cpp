@@ -111,7 +111,7 @@ int find_fixed_camera(const mjModel* m, const CameraSpec& spec, const std::strin
                               (names.empty() ? std::string("(none)") : names));
 }
 
-// ------------------------------------------------------------------------------- RAII for MuJoCo's visualizer
+// ------------------------------------------------------------------------------- RAII wrappers
 
 struct Scene {
   mjvScene scn;

@@ -160,6 +160,7 @@ VideoWriter::VideoWriter(const std::string& out_mp4, int width, int height, doub
   if (ffmpeg.empty()) {
     throw std::runtime_error("ffmpeg not found on PATH: install the Debian package ffmpeg");
   }
+  check_output_writable(out_mp4);
 
   // temporary video next to the output, so the final rename stays on one file system
   const fs::path out(out_mp4);

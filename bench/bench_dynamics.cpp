@@ -1,0 +1,218 @@
+// Dynamics layer: one call of each algorithm, and MuJoCo's mj_inverse / mj_forward on identical
+// inputs as baselines, on the paper's chains (arm4 and chain8 … chain64).
+//
+// Every case runs at one random but fixed state (seeded per model); inputs are prepared before
+// the timed loop, outputs kept alive with DoNotOptimize. Counter n = number of joints.
+
+#include <cmath>
+#include <map>
+#include <memory>
+#include <random>
+#include <string>
+
+#include "bench_support.hpp"
+#include "idmpc/dynamics/dynamics.hpp"
+
+namespace idmpc::bench {
+namespace {
+
+// the state every algorithm of one model is timed at, with MuJoCo set up at the same point
+struct DynamicsFixture {
+  const BenchModel* bm = nullptr;
+  std::unique_ptr<Data> data;
+  VecX<double> q, v, a, tau, w, x;  // x: right-hand side of M⁻¹x; w: RNEA adjoint seed
+  mj::ModelPtr m;  // copy with constraints and actuation off: forces enter as qfrc_applied only
+  mj::DataPtr d;
+  int n = 0;
+};
+
+DynamicsFixture& fixture(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<DynamicsFixture>> cache;
+  auto& slot = cache[name];
+  if (slot) return *slot;
+  auto f = std::make_unique<DynamicsFixture>();
+  f->bm = &bench_model(name);
+  const Model& model = f->bm->model();
+  f->n = model.n;
+  f->data = std::make_unique<Data>(model);
+  // random state: angles anywhere on the circle, moderate rates; seeded by the model size
+  std::mt19937 rng(20240 + static_cast<unsigned>(model.n));
+  std::uniform_real_distribution<double> angle(-M_PI, M_PI), unit(-1.0, 1.0);
+  auto draw = [&](auto& dist) {
+    VecX<double> out(model.n);
+    for (int i = 0; i < model.n; ++i) out[i] = dist(rng);
+    return out;
+  };
+  f->q = draw(angle);
+  f->v = draw(unit);
+  f->a = draw(unit);
+  f->tau = 10.0 * draw(unit);
+  f->w = draw(unit);
+  f->x = draw(unit);
+
+  // MuJoCo at the same point: constraints and actuation off, ctrl = 0, τ through qfrc_applied
+  f->m.reset(mj_copyModel(nullptr, f->bm->m.get()));
+  f->m->opt.disableflags |= mjDSBL_CONSTRAINT | mjDSBL_ACTUATION;
+  f->d = mj::make_data(f->m.get());
+  mju_copy(f->d->qpos, f->q.data(), model.n);
+  mju_copy(f->d->qvel, f->v.data(), model.n);
+  mju_copy(f->d->qacc, f->a.data(), model.n);
+  mju_copy(f->d->qfrc_applied, f->tau.data(), model.n);
+  mju_zero(f->d->ctrl, f->m->nu);
+  slot = std::move(f);
+  return *slot;
+}
+
+void set_counters(benchmark::State& state, const DynamicsFixture& f) {
+  state.counters["n"] = f.n;
+}
+
+void BM_Rnea(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  for (auto _ : state) {
+    const VecX<double>& tau = rnea(model, *f.data, f.q, f.v, f.a);
+    benchmark::DoNotOptimize(tau.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+void BM_Aba(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  for (auto _ : state) {
+    const VecX<double>& qdd = aba(model, *f.data, f.q, f.v, f.tau);
+    benchmark::DoNotOptimize(qdd.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+void BM_Crba(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  for (auto _ : state) {
+    const MatX<double>& M = crba(model, *f.data, f.q);
+    benchmark::DoNotOptimize(M.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+void BM_RneaDerivatives(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  for (auto _ : state) {
+    rnea_derivatives(model, *f.data, f.q, f.v, f.a);
+    benchmark::DoNotOptimize(f.data->dtau_dq.data());
+    benchmark::DoNotOptimize(f.data->dtau_dv.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+void BM_AbaDerivatives(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  for (auto _ : state) {
+    aba_derivatives(model, *f.data, f.q, f.v, f.tau);
+    benchmark::DoNotOptimize(f.data->da_dq.data());
+    benchmark::DoNotOptimize(f.data->da_dv.data());
+    benchmark::DoNotOptimize(f.data->Minv.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+// the adjoint triple (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w as the OCP gets it: the RNEA pass it needs,
+// then the reverse sweep
+void BM_RneaVjp(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  for (auto _ : state) {
+    rnea(model, *f.data, f.q, f.v, f.a);
+    rnea_vjp(model, *f.data, f.w);
+    benchmark::DoNotOptimize(f.data->g_q.data());
+    benchmark::DoNotOptimize(f.data->g_v.data());
+    benchmark::DoNotOptimize(f.data->g_a.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+// the reverse sweep alone, after one RNEA pass outside the loop
+void BM_RneaVjpSweepOnly(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  rnea(model, *f.data, f.q, f.v, f.a);
+  for (auto _ : state) {
+    rnea_vjp(model, *f.data, f.w);
+    benchmark::DoNotOptimize(f.data->g_q.data());
+    benchmark::DoNotOptimize(f.data->g_v.data());
+    benchmark::DoNotOptimize(f.data->g_a.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+// M⁻¹x through the articulated inertias of one ABA pass outside the loop
+void BM_MinvApply(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  const Model& model = f.bm->model();
+  aba(model, *f.data, f.q, f.v, f.tau);
+  for (auto _ : state) {
+    const VecX<double>& y = minv_apply(model, *f.data, f.x);
+    benchmark::DoNotOptimize(y.data());
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+// baseline of RNEA: qfrc_inverse at (qpos, qvel, qacc)
+void BM_MjInverse(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  for (auto _ : state) {
+    mj_inverse(f.m.get(), f.d.get());
+    benchmark::DoNotOptimize(f.d->qfrc_inverse);
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+// baseline of ABA: qacc at (qpos, qvel) with qfrc_applied = τ, no constraints
+void BM_MjForward(benchmark::State& state, const char* name) {
+  DynamicsFixture& f = fixture(name);
+  for (auto _ : state) {
+    mj_forward(f.m.get(), f.d.get());
+    benchmark::DoNotOptimize(f.d->qacc);
+    benchmark::ClobberMemory();
+  }
+  set_counters(state, f);
+}
+
+// one case per model: the paper's arm and chains, plus two larger generated chains
+#define IDMPC_BENCH_MODELS(BM)             \
+  BENCHMARK_CAPTURE(BM, arm4, "arm4");     \
+  BENCHMARK_CAPTURE(BM, chain8, "chain8");   \
+  BENCHMARK_CAPTURE(BM, chain16, "chain16"); \
+  BENCHMARK_CAPTURE(BM, chain24, "chain24"); \
+  BENCHMARK_CAPTURE(BM, chain32, "chain32"); \
+  BENCHMARK_CAPTURE(BM, chain48, "chain48"); \
+  BENCHMARK_CAPTURE(BM, chain64, "chain64")
+
+IDMPC_BENCH_MODELS(BM_Rnea);
+IDMPC_BENCH_MODELS(BM_MjInverse);
+IDMPC_BENCH_MODELS(BM_Aba);
+IDMPC_BENCH_MODELS(BM_MjForward);
+IDMPC_BENCH_MODELS(BM_Crba);
+IDMPC_BENCH_MODELS(BM_RneaDerivatives);
+IDMPC_BENCH_MODELS(BM_AbaDerivatives);
+IDMPC_BENCH_MODELS(BM_RneaVjp);
+IDMPC_BENCH_MODELS(BM_RneaVjpSweepOnly);
+IDMPC_BENCH_MODELS(BM_MinvApply);
+
+}  // namespace
+}  // namespace idmpc::bench
+
+int main(int argc, char** argv) { return idmpc::bench::run_benchmarks(argc, argv, 0.2); }

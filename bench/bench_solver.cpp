@@ -1,0 +1,315 @@
+// Solver layer: the cost of one C/GMRES update of the four controllers (FD/ID × matrix/adjoint)
+// on the paper's grids, timed on states of a real closed-loop swing-up and warm-started exactly
+// as in the loop.
+//
+// Fixture (outside timing, once per case): the swing-up of DESIGN §7 (q0 = (−π, 0, …), q_ref = 0,
+// paper weights) runs in closed loop with the MuJoCo plant and the case's controller for 0.3 s
+// (fewer steps, at least 20, where that would take over ~1.5 s of wall time: counter states),
+// recording the measured (t, q, v) and the solution U of every successful update. The
+// timed loop then replays those measurements through a copy of the solver taken right after its
+// zero-horizon initialization, so each timed update is the very computation the loop made; at the
+// end of the record the copy is restored (one copy per cycle, amortized). A run that diverged is
+// replayed up to its last successful update and reported with counter diverged = 1; an ID run
+// that diverges with Q_a = 0 is redone with the paper's fallback Q_a = 1e-4 (counter Qa).
+//
+// Cases: BM_Update/<fd|id>_<matrix|adjoint>/n:<n>/N:<N>/kmax:<kmax>, the union of
+//   Tables 1–2 (arm4: N ∈ {10,15,25,50} × kmax ∈ {3,5,10}),
+//   Table 3 and the size scaling (n ∈ {4,8,16,24,32,48,64}, N = 25, kmax = 10),
+//   the horizon scaling (n ∈ {4,16}, N ∈ {10,15,25,50,75,100}, kmax = 10);
+// BM_Residual/<controller>/n:<n>/N:25 times one F evaluation on the same states and solutions;
+// BM_StageVectorOps/n:<n> times the vector work of one ID stage without its dynamics calls.
+
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include "bench_support.hpp"
+#include "idmpc/mujoco/closed_loop.hpp"
+#include "idmpc/ocp/ocp.hpp"
+#include "idmpc/solver/cgmres.hpp"
+
+namespace idmpc::bench {
+namespace {
+
+// recorded swing-up: simulated time, and a cap on the fixture's wall time for the expensive cases
+constexpr double kRecordSeconds = 0.3;
+constexpr double kRecordBudgetSeconds = 1.5;
+constexpr int kMinRecordedSteps = 20;
+// the paper's fallback weight on a for ID runs that fail with Q_a = 0
+constexpr double kQaFallback = 1e-4;
+
+struct Controller {
+  Formulation formulation;
+  DerivativeMode mode;
+  std::string name() const { return to_string(formulation) + "_" + to_string(mode); }
+};
+
+const Controller kControllers[] = {
+    {Formulation::kForwardDynamics, DerivativeMode::kMatrix},
+    {Formulation::kForwardDynamics, DerivativeMode::kAdjoint},
+    {Formulation::kInverseDynamics, DerivativeMode::kMatrix},
+    {Formulation::kInverseDynamics, DerivativeMode::kAdjoint},
+};
+
+struct Case {
+  Controller controller;
+  int n, N, kmax;
+  auto key() const {
+    return std::make_tuple(static_cast<int>(controller.formulation), static_cast<int>(controller.mode), n, N, kmax);
+  }
+};
+
+// paper's weights and swing-up (DESIGN §7)
+OcpWeights paper_weights(int n, double Qa) {
+  return OcpWeights{VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1),
+                    VecX<double>::Constant(n, Qa), VecX<double>::Constant(n, 1e-4)};
+}
+
+VecX<double> swingup_q0(int n) {
+  VecX<double> q0 = VecX<double>::Zero(n);
+  q0[0] = -M_PI;
+  return q0;
+}
+
+CgmresSettings paper_settings(int kmax) {
+  CgmresSettings s;
+  s.kmax = kmax;
+  s.Tf = 0.5;
+  s.alpha = 1.0;
+  s.dt = 1e-3;
+  return s;
+}
+
+// one controller on one model, the swing-up it produced, and the solver replaying it
+struct SolverFixture {
+  decltype(std::declval<Case>().key()) key;
+  const BenchModel* bm = nullptr;
+  double Qa = 0;
+  std::unique_ptr<Ocp> ocp;
+  std::unique_ptr<Cgmres> start;  // right after the zero-horizon initialization at t = 0
+  std::optional<Cgmres> solver;   // replays the record from `start`
+  std::vector<double> t;
+  std::vector<VecX<double>> q, v, U;  // measured state and solution after each update
+  bool diverged = false;
+  double diverged_at = std::nan("");
+  size_t next = 0;
+  VecX<double> F;
+};
+
+// runs the closed loop and records it; returns whether the run diverged
+bool record_swingup(SolverFixture& f, const Case& c) {
+  const int n = c.n;
+  const VecX<double> q_ref = VecX<double>::Zero(n), q0 = swingup_q0(n), v0 = VecX<double>::Zero(n);
+  f.ocp = std::make_unique<Ocp>(f.bm->model(), c.controller.formulation, c.controller.mode,
+                                paper_weights(n, f.Qa), q_ref, c.N);
+  const CgmresSettings settings = paper_settings(c.kmax);
+  f.start = std::make_unique<Cgmres>(*f.ocp, settings);
+  f.start->initialize(0.0, q0, v0);
+
+  // probe the update cost to keep the recording within its wall-time budget
+  double duration = kRecordSeconds;
+  {
+    Cgmres probe(*f.start);
+    const auto t0 = std::chrono::steady_clock::now();
+    constexpr int kProbe = 2;
+    for (int k = 0; k < kProbe; ++k) probe.update(k * settings.dt, q0, v0);
+    const double per_update =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / kProbe;
+    const double steps = std::floor(kRecordBudgetSeconds / std::max(per_update, 1e-9));
+    duration = std::min(kRecordSeconds, std::max<double>(kMinRecordedSteps, steps) * settings.dt);
+  }
+
+  // the swing-up in closed loop, recording each measurement and the solution it produced
+  Cgmres solver(*f.start);
+  mj::Plant plant(f.bm->m.get(), f.bm->imported.actuation);
+  mj::ClosedLoopSettings loop;
+  loop.duration = duration;
+  loop.q0 = q0;
+  loop.v0 = v0;
+  loop.phase_timing = false;
+  f.t.clear();
+  f.q.clear();
+  f.v.clear();
+  f.U.clear();
+  const mj::RunResult result = mj::run_closed_loop(
+      plant, *f.ocp, solver, q_ref, loop, [&](const mj::StepRecord& r) {
+        f.t.push_back(r.t);
+        f.q.push_back(r.q);
+        f.v.push_back(r.v);
+        f.U.push_back(solver.solution());
+      });
+  // keep the successful updates only
+  const size_t ok = result.update_ms.size();
+  f.t.resize(ok);
+  f.q.resize(ok);
+  f.v.resize(ok);
+  f.U.resize(ok);
+  f.diverged = result.diverged;
+  f.diverged_at = result.diverged_at;
+  return result.diverged;
+}
+
+SolverFixture& fixture(const Case& c) {
+  static std::unique_ptr<SolverFixture> current;  // one case at a time: cases run in order
+  if (current && current->key == c.key()) return *current;
+  current.reset();
+  auto f = std::make_unique<SolverFixture>();
+  f->key = c.key();
+  f->bm = &bench_model(c.n);
+  f->Qa = 0;
+  if (record_swingup(*f, c) && c.controller.formulation == Formulation::kInverseDynamics) {
+    f->Qa = kQaFallback;
+    record_swingup(*f, c);
+  }
+  f->F = VecX<double>::Zero(f->ocp->dim());
+  if (!f->t.empty()) f->solver.emplace(*f->start);
+  current = std::move(f);
+  return *current;
+}
+
+void common_counters(benchmark::State& state, const Case& c, const SolverFixture& f) {
+  state.counters["n"] = c.n;
+  state.counters["N"] = c.N;
+  state.counters["kmax"] = c.kmax;
+  state.counters["diverged"] = f.diverged ? 1 : 0;
+  state.counters["diverged_at"] = f.diverged ? f.diverged_at : -1;
+  state.counters["Qa"] = f.Qa;
+  state.counters["states"] = static_cast<double>(f.t.size());
+}
+
+// one C/GMRES update, cycling through the recorded measurements
+void BM_Update(benchmark::State& state, Case c) {
+  SolverFixture& f = fixture(c);
+  if (f.t.empty()) {
+    state.SkipWithError("the swing-up diverged before its first update");
+    return;
+  }
+  long evaluations = 0;
+  for (auto _ : state) {
+    if (f.next == f.t.size()) {  // end of the record: back to the solver that started it
+      f.solver.emplace(*f.start);
+      f.next = 0;
+    }
+    const size_t k = f.next++;
+    const bool ok = f.solver->update(f.t[k], f.q[k], f.v[k]);
+    benchmark::DoNotOptimize(ok);
+    benchmark::DoNotOptimize(f.solver->solution().data());
+    evaluations += f.solver->evaluations();
+  }
+  common_counters(state, c, f);
+  const double iterations = static_cast<double>(state.iterations());
+  state.counters["evals"] = evaluations / iterations;
+  // time per F evaluation [us]: a rate inverted
+  state.counters["us_per_eval"] =
+      benchmark::Counter(1e-6 * evaluations, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+
+// one F evaluation alone, on the recorded states and solutions
+void BM_Residual(benchmark::State& state, Case c) {
+  SolverFixture& f = fixture(c);
+  if (f.t.empty()) {
+    state.SkipWithError("the swing-up diverged before its first update");
+    return;
+  }
+  size_t k = 0;
+  for (auto _ : state) {
+    if (k == f.t.size()) k = 0;
+    f.ocp->residual(f.U[k], f.q[k], f.v[k], f.start->horizon(f.t[k]), f.F);
+    benchmark::DoNotOptimize(f.F.data());
+    benchmark::ClobberMemory();
+    ++k;
+  }
+  common_counters(state, c, f);
+}
+
+// the vector work of the ID residual's stages (Euler rollout, w = R u, costates, F_i) with the
+// RNEA and adjoint calls replaced by their stored outputs: with BM_RneaVjp it prices one stage
+void BM_StageVectorOps(benchmark::State& state, int n) {
+  constexpr int N = 25;
+  const double dtau = 0.5 / N;
+  const OcpWeights w8 = paper_weights(n, 0.0);
+  const VecX<double> q_ref = VecX<double>::Zero(n);
+  VecX<double> U = VecX<double>::Random(N * n), F = VecX<double>::Zero(N * n);
+  MatX<double> q = MatX<double>::Random(n, N + 1), v = MatX<double>::Random(n, N + 1);
+  MatX<double> a = MatX<double>::Zero(n, N), u = MatX<double>::Zero(n, N);
+  const VecX<double> tau = VecX<double>::Random(n), g_q = VecX<double>::Random(n),
+                     g_v = VecX<double>::Random(n), g_a = VecX<double>::Random(n);
+  VecX<double> lmd(n), gmm(n), lmd_next(n), gmm_next(n), gq(n), gv(n), w(n);
+  for (auto _ : state) {
+    for (int i = 0; i < N; ++i) {
+      a.col(i) = U.segment(i * n, n);
+      u.col(i) = tau;
+      q.col(i + 1) = q.col(i) + dtau * v.col(i);
+      v.col(i + 1) = v.col(i) + dtau * a.col(i);
+    }
+    lmd_next = w8.Qq.cwiseProduct(q.col(N) - q_ref);
+    gmm_next = w8.Qv.cwiseProduct(v.col(N));
+    for (int i = N - 1; i >= 0; --i) {
+      w = w8.R.cwiseProduct(u.col(i));
+      benchmark::DoNotOptimize(w.data());
+      gq = g_q;
+      gv = g_v;
+      F.segment(i * n, n) = gmm_next + w8.Qa.cwiseProduct(a.col(i)) + g_a;
+      lmd = lmd_next + dtau * (w8.Qq.cwiseProduct(q.col(i) - q_ref) + gq);
+      gmm = gmm_next + dtau * (w8.Qv.cwiseProduct(v.col(i)) + lmd_next + gv);
+      lmd_next.swap(lmd);
+      gmm_next.swap(gmm);
+    }
+    benchmark::DoNotOptimize(F.data());
+    benchmark::ClobberMemory();
+  }
+  state.counters["n"] = n;
+  state.counters["N"] = N;
+  // per stage [ns]
+  state.counters["ns_per_stage"] = benchmark::Counter(
+      1e-9 * N, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+void register_all() {
+  // the union of the grids, in order, each case once
+  std::vector<std::tuple<int, int, int>> cases;  // (n, N, kmax)
+  std::set<std::tuple<int, int, int>> seen;
+  auto add = [&](int n, int N, int kmax) {
+    if (seen.insert({n, N, kmax}).second) cases.emplace_back(n, N, kmax);
+  };
+  for (int kmax : {3, 5, 10}) {
+    for (int N : {10, 15, 25, 50}) add(4, N, kmax);  // Tables 1–2
+  }
+  for (int n : {4, 8, 16, 24, 32, 48, 64}) add(n, 25, 10);  // Table 3 and size scaling
+  for (int n : {4, 16}) {
+    for (int N : {10, 15, 25, 50, 75, 100}) add(n, N, 10);  // horizon scaling
+  }
+
+  for (const auto& [n, N, kmax] : cases) {
+    for (const Controller& ctrl : kControllers) {
+      const Case c{ctrl, n, N, kmax};
+      const std::string tag = ctrl.name() + "/n:" + std::to_string(n) + "/N:" + std::to_string(N);
+      benchmark::RegisterBenchmark(("BM_Update/" + tag + "/kmax:" + std::to_string(kmax)).c_str(),
+                                   BM_Update, c)
+          ->Unit(benchmark::kMicrosecond);
+      if (N == 25 && kmax == 10) {  // same fixture: registered right after its update case
+        benchmark::RegisterBenchmark(("BM_Residual/" + tag).c_str(), BM_Residual, c)
+            ->Unit(benchmark::kMicrosecond);
+      }
+    }
+  }
+  for (int n : {4, 8, 16, 24, 32, 48, 64}) {
+    benchmark::RegisterBenchmark(("BM_StageVectorOps/n:" + std::to_string(n)).c_str(),
+                                 BM_StageVectorOps, n)
+        ->Unit(benchmark::kNanosecond);
+  }
+}
+
+}  // namespace
+}  // namespace idmpc::bench
+
+int main(int argc, char** argv) {
+  idmpc::bench::register_all();
+  return idmpc::bench::run_benchmarks(argc, argv, 0.2);
+}

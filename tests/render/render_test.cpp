@@ -1,0 +1,502 @@
+// Off-screen rendering: run logs, the video writer, and whole videos of mjcf/arm4.xml checked
+// with ffprobe and by decoding frames back to pixels.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "idmpc/mujoco/load.hpp"
+#include "idmpc/render/gl_context.hpp"
+#include "idmpc/render/run_log.hpp"
+#include "idmpc/render/video.hpp"
+#include "idmpc/render/video_writer.hpp"
+
+namespace idmpc::render {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kModel = IDMPC_SOURCE_DIR "/mjcf/arm4.xml";
+constexpr double kPi = 3.14159265358979323846;
+
+// small videos keep the suite fast
+constexpr int kWidth = 320;
+constexpr int kHeight = 240;
+constexpr double kFps = 30;
+
+// H.264 at its default quality and MuJoCo's lighting move colours: hue within this many degrees
+constexpr double kHueTolerance = 18;
+constexpr double kMinSaturation = 0.35;
+constexpr double kMinValue = 0.25;
+
+// ------------------------------------------------------------------------------- helpers
+
+// a fresh directory under the system temp dir, removed with everything in it
+class TempDir {
+ public:
+  TempDir() {
+    std::string templ = (fs::temp_directory_path() / "idmpc_render_test_XXXXXX").string();
+    if (!mkdtemp(templ.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = templ;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// a swing-up-like log: q0 from -pi to 0 smoothly, small motions of the other joints;
+// `lag` delays the whole motion (a second run that visibly differs)
+void write_log(const std::string& path, int n, double duration, double lag = 0,
+               double dt = 1e-3) {
+  std::ofstream out(path);
+  out << std::setprecision(12) << "t";
+  for (const char* p : {"q", "v", "u"}) {
+    for (int i = 0; i < n; ++i) out << ',' << p << i;
+  }
+  out << ",residual,update_ms\n";
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * dt;
+    const double s = std::clamp((t - lag) / (0.8 * duration), 0.0, 1.0);
+    const double smooth = s * s * (3 - 2 * s);
+    out << t;
+    for (int i = 0; i < n; ++i) {
+      out << ',' << (i == 0 ? -kPi * (1 - smooth) : 0.2 * std::sin(kPi * smooth * (i + 1)));
+    }
+    for (int i = 0; i < n; ++i) out << ',' << 0.0;
+    for (int i = 0; i < n; ++i) out << ',' << 20 * std::sin(kPi * t / duration) / (i + 1);
+    out << ',' << 1e-3 * std::exp(-t) << ',' << 0.5 + 0.1 * std::sin(7 * t) << '\n';
+  }
+}
+
+struct CommandResult {
+  int status = -1;
+  std::string out;
+};
+
+// runs a shell command, capturing stdout (binary-safe)
+CommandResult run(const std::string& command) {
+  CommandResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  char buffer[1 << 16];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), pipe)) > 0) result.out.append(buffer, n);
+  const int status = pclose(pipe);
+  result.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+struct StreamInfo {
+  std::string codec, pix_fmt;
+  int width = 0, height = 0;
+  long frames = 0;
+  double duration = 0;
+};
+
+StreamInfo probe(const std::string& mp4) {
+  const CommandResult r = run(
+      "ffprobe -v error -select_streams v:0 -count_frames -show_entries "
+      "stream=codec_name,pix_fmt,width,height,nb_read_frames,duration -of json '" + mp4 + "'");
+  EXPECT_EQ(r.status, 0) << "ffprobe failed on " << mp4;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  const nlohmann::json& s = j.at("streams").at(0);
+  StreamInfo info;
+  info.codec = s.at("codec_name").get<std::string>();
+  info.pix_fmt = s.at("pix_fmt").get<std::string>();
+  info.width = s.at("width").get<int>();
+  info.height = s.at("height").get<int>();
+  info.frames = std::stol(s.at("nb_read_frames").get<std::string>());
+  info.duration = std::stod(s.at("duration").get<std::string>());
+  return info;
+}
+
+// frame `index` decoded to rgb24, rows top to bottom
+std::vector<unsigned char> decode_frame(const std::string& mp4, int index) {
+  const CommandResult r =
+      run("ffmpeg -v error -i '" + mp4 + "' -vf 'select=eq(n\\," + std::to_string(index) +
+          ")' -vframes 1 -f rawvideo -pix_fmt rgb24 -");
+  EXPECT_EQ(r.status, 0) << "ffmpeg could not decode frame " << index << " of " << mp4;
+  return std::vector<unsigned char>(r.out.begin(), r.out.end());
+}
+
+// hue in degrees, saturation and value in [0, 1]
+struct Hsv {
+  double h, s, v;
+};
+
+Hsv to_hsv(double r, double g, double b) {
+  const double mx = std::max({r, g, b});
+  const double mn = std::min({r, g, b});
+  const double c = mx - mn;
+  double h = 0;
+  if (c > 0) {
+    if (mx == r) h = 60 * std::fmod((g - b) / c + 6, 6.0);
+    else if (mx == g) h = 60 * ((b - r) / c + 2);
+    else h = 60 * ((r - g) / c + 4);
+  }
+  return {h, mx > 0 ? c / mx : 0, mx};
+}
+
+double hue_distance(double a, double b) {
+  const double d = std::fabs(a - b);
+  return std::min(d, 360 - d);
+}
+
+// pixels of a saturated colour whose hue is within kHueTolerance of `hue`
+long count_hue(const std::vector<unsigned char>& rgb, double hue) {
+  long count = 0;
+  for (std::size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const Hsv p = to_hsv(rgb[i] / 255.0, rgb[i + 1] / 255.0, rgb[i + 2] / 255.0);
+    if (p.s >= kMinSaturation && p.v >= kMinValue && hue_distance(p.h, hue) <= kHueTolerance) {
+      ++count;
+    }
+  }
+  return count;
+}
+
+double grey_variance(const std::vector<unsigned char>& rgb) {
+  double sum = 0, sum2 = 0;
+  const double n = static_cast<double>(rgb.size() / 3);
+  for (std::size_t i = 0; i + 2 < rgb.size(); i += 3) {
+    const double y = 0.299 * rgb[i] + 0.587 * rgb[i + 1] + 0.114 * rgb[i + 2];
+    sum += y;
+    sum2 += y * y;
+  }
+  return sum2 / n - (sum / n) * (sum / n);
+}
+
+// colour of the arm's links: the box geoms of moving bodies (material colour if they have one)
+Hsv link_colour(const mjModel* m) {
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (m->geom_type[g] != mjGEOM_BOX || m->body_weldid[m->geom_bodyid[g]] == 0) continue;
+    const int mat = m->geom_matid[g];
+    const float* rgba = mat >= 0 ? m->mat_rgba + 4 * mat : m->geom_rgba + 4 * g;
+    return to_hsv(rgba[0], rgba[1], rgba[2]);
+  }
+  throw std::runtime_error("no link box in the model");
+}
+
+VideoOptions small_options() {
+  VideoOptions o;
+  o.width = kWidth;
+  o.height = kHeight;
+  o.fps = kFps;
+  return o;
+}
+
+template <class E>
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    return std::string("wrong exception type: ") + e.what();
+  }
+  return "no exception";
+}
+
+class RenderTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(fs::exists(kModel)) << "missing model " << kModel;
+    ASSERT_FALSE(find_on_path("ffmpeg").empty()) << "ffmpeg is not installed";
+    ASSERT_FALSE(find_on_path("ffprobe").empty()) << "ffprobe is not installed";
+  }
+  TempDir dir_;
+};
+
+// ------------------------------------------------------------------------------- run logs
+
+TEST_F(RenderTest, ReadsLogAndLabelFromSummary) {
+  const std::string csv = dir_.file("run.csv");
+  write_log(csv, 4, 0.1);
+  RunLog plain = read_run_log(csv);
+  EXPECT_EQ(plain.n, 4);
+  EXPECT_EQ(plain.nu, 4);
+  EXPECT_EQ(plain.rows(), 101u);
+  EXPECT_NEAR(plain.q_row(0)[0], -kPi, 1e-9);
+  EXPECT_EQ(plain.label, "run");
+  EXPECT_EQ(plain.nearest_row(0.0504), 50u);
+  EXPECT_EQ(plain.nearest_row(-1.0), 0u);
+  EXPECT_EQ(plain.nearest_row(9.0), 100u);
+
+  std::ofstream(dir_.file("run.json"))
+      << R"({"formulation": "id", "derivatives": "adjoint", "N": 25, "kmax": 10})";
+  const RunLog labelled = read_run_log(csv);
+  EXPECT_EQ(labelled.label, "C/GMRES (ID, adjoint) N=25 kmax=10");
+  EXPECT_EQ(labelled.formulation, "id");
+}
+
+TEST_F(RenderTest, LogErrorsNameTheFileAndLine) {
+  const std::string missing = dir_.file("missing_run.csv");
+  EXPECT_NE(message_of<std::runtime_error>([&] { read_run_log(missing); }).find("missing_run.csv"),
+            std::string::npos);
+
+  const std::string header = dir_.file("bad_header.csv");
+  std::ofstream(header) << "time,q0,v0,u0,residual,update_ms\n0,0,0,0,0,0\n";
+  const std::string header_msg = message_of<std::runtime_error>([&] { read_run_log(header); });
+  EXPECT_NE(header_msg.find("bad_header.csv"), std::string::npos) << header_msg;
+  EXPECT_NE(header_msg.find("header"), std::string::npos) << header_msg;
+
+  const std::string columns = dir_.file("short_row.csv");
+  std::ofstream(columns) << "t,q0,v0,u0,residual,update_ms\n0,0,0,0,0,0\n0.001,0,0,0,0\n";
+  const std::string columns_msg = message_of<std::runtime_error>([&] { read_run_log(columns); });
+  EXPECT_NE(columns_msg.find("short_row.csv"), std::string::npos) << columns_msg;
+  EXPECT_NE(columns_msg.find("line 3"), std::string::npos) << columns_msg;
+
+  const std::string text = dir_.file("text_value.csv");
+  std::ofstream(text) << "t,q0,v0,u0,residual,update_ms\n0,0,0,0,0,0\n0.001,abc,0,0,0,0\n";
+  const std::string text_msg = message_of<std::runtime_error>([&] { read_run_log(text); });
+  EXPECT_NE(text_msg.find("line 3"), std::string::npos) << text_msg;
+  EXPECT_NE(text_msg.find("'q0'"), std::string::npos) << text_msg;
+  EXPECT_NE(text_msg.find("'abc'"), std::string::npos) << text_msg;
+}
+
+TEST_F(RenderTest, LogWithWrongJointCountIsRejected) {
+  const std::string csv = dir_.file("three_joints.csv");
+  write_log(csv, 3, 0.2);
+  const RunLog log = read_run_log(csv);
+  const std::string out = dir_.file("never.mp4");
+  const std::string msg = message_of<std::invalid_argument>(
+      [&] { render_video(kModel, {log}, small_options(), out); });
+  EXPECT_NE(msg.find("three_joints.csv"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("arm4.xml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("3 joints"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// ------------------------------------------------------------------------------- errors
+
+TEST_F(RenderTest, UnwritableOutputIsRejectedBeforeRendering) {
+  const std::string csv = dir_.file("run.csv");
+  write_log(csv, 4, 0.2);
+  const RunLog log = read_run_log(csv);
+  // tests may run as root: only a missing directory or /proc is reliably unwritable
+  const std::vector<std::string> outs{"/proc/nonexistent/x.mp4", dir_.file("no/such/dir/x.mp4"),
+                                      "/proc/x.mp4"};
+  for (const std::string& out : outs) {
+    const std::string msg = message_of<std::runtime_error>(
+        [&] { render_video(kModel, {log}, small_options(), out); });
+    EXPECT_NE(msg.find(out), std::string::npos) << msg;
+  }
+}
+
+TEST_F(RenderTest, BadOptionsAreRejected) {
+  const std::string csv = dir_.file("run.csv");
+  write_log(csv, 4, 0.2);
+  const RunLog log = read_run_log(csv);
+  const std::string out = dir_.file("x.mp4");
+  VideoOptions odd = small_options();
+  odd.width = 321;
+  EXPECT_NE(message_of<std::invalid_argument>([&] { render_video(kModel, {log}, odd, out); })
+                .find("--width"),
+            std::string::npos);
+  VideoOptions camera = small_options();
+  camera.camera = "fixed:no_such_camera";
+  const std::string msg =
+      message_of<std::invalid_argument>([&] { render_video(kModel, {log}, camera, out); });
+  EXPECT_NE(msg.find("no_such_camera"), std::string::npos) << msg;
+  camera.camera = "90,-10";
+  EXPECT_NE(message_of<std::invalid_argument>([&] { render_video(kModel, {log}, camera, out); })
+                .find("--camera"),
+            std::string::npos);
+  const std::string none =
+      message_of<std::invalid_argument>([&] { render_video(kModel, {}, small_options(), out); });
+  EXPECT_NE(none.find("runs"), std::string::npos) << none;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderTest, WriterReportsMissingFfmpeg) {
+  const char* old_path = std::getenv("PATH");
+  const std::string saved = old_path ? old_path : "";
+  setenv("PATH", dir_.path().c_str(), 1);
+  const std::string msg = message_of<std::runtime_error>(
+      [&] { VideoWriter writer(dir_.file("x.mp4"), kWidth, kHeight, kFps); });
+  setenv("PATH", saved.c_str(), 1);
+  EXPECT_NE(msg.find("ffmpeg not found on PATH"), std::string::npos) << msg;
+}
+
+TEST_F(RenderTest, WriterReportsFfmpegFailureWithItsStderr) {
+  // a fake ffmpeg that fails at once, as a build without libx264 would
+  const fs::path bin = dir_.path() / "bin";
+  fs::create_directory(bin);
+  std::ofstream(bin / "ffmpeg") << "#!/bin/sh\necho \"Unknown encoder 'libx264'\" >&2\nexit 3\n";
+  fs::permissions(bin / "ffmpeg", fs::perms::owner_all);
+  const char* old_path = std::getenv("PATH");
+  const std::string saved = old_path ? old_path : "";
+  setenv("PATH", (bin.string() + ":" + saved).c_str(), 1);
+  const std::string out = dir_.file("failed.mp4");
+  const std::string msg = message_of<std::runtime_error>([&] {
+    VideoWriter writer(out, kWidth, kHeight, kFps);
+    std::vector<unsigned char> grey(static_cast<std::size_t>(kWidth * kHeight * 3), 128);
+    for (int i = 0; i < 5; ++i) writer.write_frame(grey.data());
+    writer.finish();
+  });
+  setenv("PATH", saved.c_str(), 1);
+  EXPECT_NE(msg.find("exit status 3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Unknown encoder 'libx264'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("failed.mp4"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(RenderTest, AbandonedWriterLeavesNoFile) {
+  const std::string out = dir_.file("abandoned.mp4");
+  {
+    VideoWriter writer(out, kWidth, kHeight, kFps);
+    std::vector<unsigned char> grey(static_cast<std::size_t>(kWidth * kHeight * 3), 128);
+    writer.write_frame(grey.data());
+  }
+  EXPECT_FALSE(fs::exists(out));
+  for (const auto& entry : fs::directory_iterator(dir_.path())) {
+    ADD_FAILURE() << "left behind: " << entry.path();
+  }
+}
+
+// ------------------------------------------------------------------------------- videos
+
+TEST_F(RenderTest, GlContextRejectsBadSize) {
+  EXPECT_THROW(GlContext(0, 10), std::invalid_argument);
+}
+
+TEST_F(RenderTest, SingleRunVideoHasStreamAndArm) {
+  const std::string csv = dir_.file("swing.csv");
+  write_log(csv, 4, 1.0);
+  const std::string out = dir_.file("swing.mp4");
+  std::vector<double> fractions;
+  render_video(kModel, {read_run_log(csv)}, small_options(), out,
+               [&](double f) { fractions.push_back(f); });
+
+  // stream: 1 s at 30 fps, both ends shown -> 31 frames
+  const StreamInfo info = probe(out);
+  EXPECT_EQ(info.codec, "h264");
+  EXPECT_EQ(info.pix_fmt, "yuv420p");
+  EXPECT_EQ(info.width, kWidth);
+  EXPECT_EQ(info.height, kHeight);
+  EXPECT_EQ(info.frames, 31);
+  EXPECT_NEAR(info.duration, 1.0, 0.1);
+  ASSERT_EQ(fractions.size(), 31u);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+
+  // a decoded frame is not blank and shows the links' colour
+  mj::ModelPtr m = mj::load_model(kModel);
+  const Hsv link = link_colour(m.get());
+  ASSERT_GE(link.s, kMinSaturation) << "the test needs coloured links";
+  for (int index : {0, 15, 30}) {
+    const std::vector<unsigned char> rgb = decode_frame(out, index);
+    ASSERT_EQ(rgb.size(), static_cast<std::size_t>(kWidth * kHeight * 3));
+    EXPECT_GT(grey_variance(rgb), 100.0) << "frame " << index << " looks blank";
+    EXPECT_GE(count_hue(rgb, link.h), 40) << "no link-coloured pixels in frame " << index;
+  }
+  // nothing else left in the directory
+  for (const auto& entry : fs::directory_iterator(dir_.path())) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "swing.csv" || name == "swing.mp4") << "left behind: " << name;
+  }
+}
+
+TEST_F(RenderTest, CompareVideoShowsBothRunsInTheirColours) {
+  const std::string a = dir_.file("fd.csv");
+  const std::string b = dir_.file("id.csv");
+  write_log(a, 4, 0.5);
+  write_log(b, 4, 0.5, 0.15);
+  std::ofstream(dir_.file("fd.json")) << R"({"formulation": "fd", "N": 10, "kmax": 5})";
+  std::ofstream(dir_.file("id.json")) << R"({"formulation": "id", "N": 10, "kmax": 5})";
+  const std::string out = dir_.file("compare.mp4");
+  // ID given first: the colours still follow the formulation (FD blue, ID orange); no overlay,
+  // whose legend has the same colours
+  VideoOptions options = small_options();
+  options.overlay = false;
+  render_video(kModel, {read_run_log(b), read_run_log(a)}, options, out);
+
+  const StreamInfo info = probe(out);
+  EXPECT_EQ(info.frames, 16);
+  EXPECT_NEAR(info.duration, 16 / kFps, 0.1);
+  const std::vector<unsigned char> rgb = decode_frame(out, 8);
+  ASSERT_EQ(rgb.size(), static_cast<std::size_t>(kWidth * kHeight * 3));
+  const double blue = to_hsv(0.18, 0.48, 1.0).h;
+  const double orange = to_hsv(1.0, 0.52, 0.08).h;
+  EXPECT_GE(count_hue(rgb, blue), 40) << "no blue (FD) arm";
+  EXPECT_GE(count_hue(rgb, orange), 40) << "no orange (ID) arm";
+}
+
+TEST_F(RenderTest, DivergedRunHoldsItsLastPose) {
+  const std::string csv = dir_.file("diverged.csv");
+  write_log(csv, 4, 0.5);
+  // rows after 0.3 s become non-finite, as a diverged run logs them
+  std::ifstream in(csv);
+  std::string text, line;
+  std::getline(in, line);
+  text = line + "\n";
+  while (std::getline(in, line)) {
+    const double t = std::stod(line.substr(0, line.find(',')));
+    if (t > 0.3) {
+      text += line.substr(0, line.find(',')) + std::string(",nan,nan,nan,nan") +
+              ",0,0,0,0,nan,nan,nan,nan,nan,0.5\n";
+    } else {
+      text += line + "\n";
+    }
+  }
+  in.close();
+  std::ofstream(csv) << text;
+  const std::string out = dir_.file("diverged.mp4");
+  VideoOptions options = small_options();
+  options.overlay = false;  // its red "diverged" status is close to the links' orange
+  render_video(kModel, {read_run_log(csv)}, options, out);
+  const std::vector<unsigned char> last = decode_frame(out, 15);
+  mj::ModelPtr m = mj::load_model(kModel);
+  EXPECT_GE(count_hue(last, link_colour(m.get()).h), 40) << "the arm vanished after divergence";
+}
+
+// ------------------------------------------------------------------------------- command line
+
+TEST_F(RenderTest, CommandLineRendersAndReportsErrors) {
+  const std::string csv = dir_.file("cli.csv");
+  write_log(csv, 4, 0.3);
+  const std::string out = dir_.file("cli.mp4");
+  const std::string idmpc = std::string("'") + IDMPC_BINARY + "' render '" + kModel + "'";
+  const CommandResult ok = run(idmpc + " --log '" + csv + "' --out '" + out +
+                               "' --width 320 --height 240 --fps 20 2>/dev/null");
+  EXPECT_EQ(ok.status, 0);
+  ASSERT_TRUE(fs::exists(out));
+  EXPECT_EQ(probe(out).frames, 7);
+
+  const CommandResult both = run(idmpc + " --log '" + csv + "' --compare '" + csv + "' '" + csv +
+                                 "' --out '" + out + "' 2>&1");
+  EXPECT_NE(both.status, 0);
+  const CommandResult neither = run(idmpc + " --out '" + out + "' 2>&1");
+  EXPECT_EQ(neither.status, 1);
+  EXPECT_NE(neither.out.find("idmpc: error:"), std::string::npos) << neither.out;
+  const CommandResult unwritable =
+      run(idmpc + " --log '" + csv + "' --out /proc/nonexistent/x.mp4 2>&1");
+  EXPECT_EQ(unwritable.status, 1);
+  EXPECT_NE(unwritable.out.find("/proc/nonexistent/x.mp4"), std::string::npos) << unwritable.out;
+  const CommandResult missing =
+      run(idmpc + " --log '" + dir_.file("nope.csv") + "' --out '" + out + "' 2>&1");
+  EXPECT_EQ(missing.status, 1);
+  EXPECT_NE(missing.out.find("nope.csv"), std::string::npos) << missing.out;
+}
+
+}  // namespace
+}  // namespace idmpc::render
