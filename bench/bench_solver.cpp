@@ -47,7 +47,10 @@ constexpr double kQaFallback = 1e-4;
 struct Controller {
   Formulation formulation;
   DerivativeMode mode;
-  std::string name() const { return to_string(formulation) + "_" + to_string(mode); }
+  bool simd_stages = true;  ///< ID + adjoint: horizon stages in SIMD lanes (the default)
+  std::string name() const {
+    return to_string(formulation) + "_" + to_string(mode) + (simd_stages ? "" : "_scalar");
+  }
 };
 
 const Controller kControllers[] = {
@@ -55,13 +58,16 @@ const Controller kControllers[] = {
     {Formulation::kForwardDynamics, DerivativeMode::kAdjoint},
     {Formulation::kInverseDynamics, DerivativeMode::kMatrix},
     {Formulation::kInverseDynamics, DerivativeMode::kAdjoint},
+    // what the SIMD stage lanes buy: the same controller stage by stage (N = 25, kmax = 10 only)
+    {Formulation::kInverseDynamics, DerivativeMode::kAdjoint, false},
 };
 
 struct Case {
   Controller controller;
   int n, N, kmax;
   auto key() const {
-    return std::make_tuple(static_cast<int>(controller.formulation), static_cast<int>(controller.mode), n, N, kmax);
+    return std::make_tuple(static_cast<int>(controller.formulation), static_cast<int>(controller.mode),
+                           controller.simd_stages, n, N, kmax);
   }
 };
 
@@ -108,6 +114,7 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   const VecX<double> q_ref = VecX<double>::Zero(n), q0 = swingup_q0(n), v0 = VecX<double>::Zero(n);
   f.ocp = std::make_unique<Ocp>(f.bm->model(), c.controller.formulation, c.controller.mode,
                                 paper_weights(n, f.Qa), q_ref, c.N);
+  f.ocp->set_stage_batching(c.controller.simd_stages);
   const CgmresSettings settings = paper_settings(c.kmax);
   f.start = std::make_unique<Cgmres>(*f.ocp, settings);
   f.start->initialize(0.0, q0, v0);
@@ -288,6 +295,7 @@ void register_all() {
 
   for (const auto& [n, N, kmax] : cases) {
     for (const Controller& ctrl : kControllers) {
+      if (!ctrl.simd_stages && !(N == 25 && kmax == 10)) continue;
       const Case c{ctrl, n, N, kmax};
       const std::string tag = ctrl.name() + "/n:" + std::to_string(n) + "/N:" + std::to_string(N);
       benchmark::RegisterBenchmark(("BM_Update/" + tag + "/kmax:" + std::to_string(kmax)).c_str(),

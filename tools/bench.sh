@@ -3,18 +3,21 @@
 # with JSON output, then writes the tables and the scaling plot with tools/bench_tables.py.
 #
 # Usage: tools/bench.sh [OUT_DIR]            (default: results/bench)
-# Environment: IDMPC_BUILD_DIR (build dir, default build/), IDMPC_CMAKE_ARGS (extra CMake
+# Environment: IDMPC_BUILD_DIR (build dir, default build-bench/, configured with
+# -DIDMPC_NATIVE=ON: the benchmarks measure this machine), IDMPC_CMAKE_ARGS (extra CMake
 # arguments), IDMPC_BENCH_ARGS (extra arguments for both binaries, e.g.
 # "--benchmark_min_time=0.5", or "--benchmark_repetitions=3 --benchmark_report_aggregates_only=true"
 # on a busy machine: the tables then use the medians; the binaries default to 0.2 s per case).
 # Outputs: OUT_DIR/bench_dynamics.json, bench_solver.json, tables.md, scaling.png.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-build=${IDMPC_BUILD_DIR:-$here/build}
+build=${IDMPC_BUILD_DIR:-$here/build-bench}
 out=${1:-$here/results/bench}
 read -r -a extra <<< "${IDMPC_BENCH_ARGS:-}"
 
-IDMPC_BUILD_DIR="$build" IDMPC_CMAKE_ARGS="${IDMPC_CMAKE_ARGS:-} -DIDMPC_BUILD_BENCH=ON" \
+"$here/tools/setup.sh"
+IDMPC_BUILD_DIR="$build" \
+  IDMPC_CMAKE_ARGS="-DIDMPC_NATIVE=ON -DIDMPC_BUILD_TESTS=OFF -DIDMPC_BUILD_RENDER=OFF ${IDMPC_CMAKE_ARGS:-} -DIDMPC_BUILD_BENCH=ON" \
   "$here/tools/build.sh"
 mkdir -p "$out"
 

@@ -28,7 +28,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 
-CONTROLLERS = ["fd_matrix", "fd_adjoint", "id_matrix", "id_adjoint"]
+CONTROLLERS = ["fd_matrix", "fd_adjoint", "id_matrix", "id_adjoint", "id_adjoint_scalar"]
 MODES = ["matrix", "adjoint"]
 T12_N = [10, 15, 25, 50]
 T12_KMAX = [3, 5, 10]
@@ -441,7 +441,8 @@ def integer_ticks(ax, values):
 def plot(updates, path):
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.8))
     styles = {"fd_matrix": ("tab:red", "o", "-"), "fd_adjoint": ("tab:orange", "s", "-"),
-              "id_matrix": ("tab:blue", "o", "-"), "id_adjoint": ("tab:green", "s", "-")}
+              "id_matrix": ("tab:blue", "o", "-"), "id_adjoint": ("tab:green", "s", "-"),
+              "id_adjoint_scalar": ("tab:olive", "^", ":")}
     ns_all = []
     for c in CONTROLLERS:
         pts = sorted((k[1], ms(b)) for k, b in updates.items()

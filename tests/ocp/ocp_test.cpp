@@ -9,10 +9,16 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/ocp/ocp.hpp"
+#include "support/problems.hpp"
 #include "support/test_models.hpp"
 
 namespace idmpc {
 namespace {
+
+using test::load_problem;
+using test::paper_weights;
+using test::Problem;
+using test::random_vector;
 
 // matrix and adjoint evaluate the same sums in another order: rounding only
 constexpr double kSameResidual = 1e-9;
@@ -23,29 +29,6 @@ constexpr double kReferenceStep = 1e-4;
 // measured worst 1e-4 (FD adjoint on chain32): a Krylov basis this accurate is what GMRES needs
 constexpr double kFrechetAccuracy = 1e-3;
 
-struct Problem {
-  mj::ModelPtr m;
-  Model model;
-};
-
-Problem load(const std::string& path) {
-  Problem p{mj::load_model(path), {}};
-  p.model = mj::import_model(p.m.get(), path).model;
-  return p;
-}
-
-OcpWeights paper_weights(int n, double Qa) {
-  return {VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1),
-          VecX<double>::Constant(n, Qa), VecX<double>::Constant(n, 1e-4)};
-}
-
-VecX<double> random_vector(std::mt19937& rng, int n, double scale) {
-  std::uniform_real_distribution<double> u(-scale, scale);
-  VecX<double> x(n);
-  for (int i = 0; i < n; ++i) x[i] = u(rng);
-  return x;
-}
-
 double rel(const VecX<double>& a, const VecX<double>& b) {
   return (a - b).cwiseAbs().maxCoeff() / std::max(1.0, b.cwiseAbs().maxCoeff());
 }
@@ -54,7 +37,7 @@ class OcpModes : public ::testing::TestWithParam<std::tuple<std::string, Formula
 
 TEST_P(OcpModes, MatrixAndAdjointGiveTheSameResidual) {
   const auto& [path, formulation] = GetParam();
-  const Problem p = load(path);
+  const Problem p = load_problem(path);
   const int n = p.model.n, N = 10;
   for (unsigned seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
@@ -79,7 +62,7 @@ TEST_P(OcpModes, MatrixAndAdjointGiveTheSameResidual) {
 // in the README), so it is checked on the well-conditioned models only.
 TEST(OcpFrechetProduct, ForwardDifferenceWithH1e8IsAccurate) {
   for (const std::string name : {"arm4", "tree", "chain32"}) {
-    const Problem p = load(IDMPC_SOURCE_DIR "/mjcf/" + name + ".xml");
+    const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/" + name + ".xml");
     const int n = p.model.n, N = 25;
     std::mt19937 rng(3);
     const VecX<double> U = random_vector(rng, N * n, 0.5), q0 = random_vector(rng, n, 0.3),
@@ -105,7 +88,7 @@ TEST(OcpFrechetProduct, ForwardDifferenceWithH1e8IsAccurate) {
 
 TEST(OcpStageBatching, SimdLanesGiveTheSameResidualAsStageByStage) {
   for (const std::string path : {IDMPC_SOURCE_DIR "/mjcf/arm4.xml", IDMPC_SOURCE_DIR "/mjcf/tree.xml"}) {
-    const Problem p = load(path);
+    const Problem p = load_problem(path);
     const int n = p.model.n;
     // N not a multiple of the lane count exercises the padded last group
     for (int N : {1, 7, 25}) {

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/LU>
@@ -12,8 +13,20 @@ namespace {
 // a solution or residual this large has left any physical meaning: divergence
 constexpr double kBlowUp = 1e8;
 
+std::string text(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+
 void require(bool ok, const std::string& what, double value) {
-  if (!ok) throw std::invalid_argument(what + ", got " + std::to_string(value));
+  if (!ok) throw std::invalid_argument(what + ", got " + text(value));
+}
+
+// settings are checked before the GMRES workspace is sized from them
+const CgmresSettings& validated(const CgmresSettings& s) {
+  s.validate();
+  return s;
 }
 
 }  // namespace
@@ -29,10 +42,9 @@ void CgmresSettings::validate() const {
 
 Cgmres::Cgmres(Ocp& ocp, const CgmresSettings& settings)
     : ocp_(ocp),
-      settings_(settings),
+      settings_(validated(settings)),
       horizon_(settings.Tf, settings.alpha),
       gmres_(ocp.dim(), settings.kmax) {
-  settings_.validate();
   if (settings_.zeta == 0) settings_.zeta = 1.0 / settings_.dt;
   const int dim = ocp.dim(), n = ocp.n();
   for (VecX<double>* x : {&U_, &Udot_, &F_, &Fx_, &Fw_, &Uw_, &b_}) *x = VecX<double>::Zero(dim);

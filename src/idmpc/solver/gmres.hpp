@@ -13,18 +13,16 @@ namespace idmpc {
 
 class Gmres {
  public:
+  /// @throws std::invalid_argument if dim < 1 or kmax < 1 (checked before any allocation)
   Gmres(int dim, int kmax)
-      : kmax_(kmax),
-        V_(MatX<double>::Zero(dim, kmax + 1)),
+      : kmax_(checked(kmax, "kmax must be at least 1, got ")),
+        V_(MatX<double>::Zero(checked(dim, "GMRES dimension must be at least 1, got "), kmax + 1)),
         H_(MatX<double>::Zero(kmax + 1, kmax)),
         g_(VecX<double>::Zero(kmax + 1)),
         cs_(VecX<double>::Zero(kmax)),
         sn_(VecX<double>::Zero(kmax)),
         y_(VecX<double>::Zero(kmax)),
-        r_(VecX<double>::Zero(dim)) {
-    if (kmax < 1) throw std::invalid_argument("kmax must be at least 1, got " + std::to_string(kmax));
-    if (dim < 1) throw std::invalid_argument("GMRES dimension must be at least 1");
-  }
+        r_(VecX<double>::Zero(dim)) {}
 
   int kmax() const { return kmax_; }
 
@@ -84,6 +82,11 @@ class Gmres {
   double residual_norm() const { return residual_norm_; }
 
  private:
+  static int checked(int value, const char* message) {
+    if (value < 1) throw std::invalid_argument(message + std::to_string(value));
+    return value;
+  }
+
   int kmax_;
   MatX<double> V_, H_;
   VecX<double> g_, cs_, sn_, y_, r_;

@@ -1,0 +1,25 @@
+#include "support/problems.hpp"
+
+#include "idmpc/mujoco/import.hpp"
+
+namespace idmpc::test {
+
+Problem load_problem(const std::string& path) {
+  Problem p{mj::load_model(path), {}};
+  p.model = mj::import_model(p.m.get(), path).model;
+  return p;
+}
+
+OcpWeights paper_weights(int n, double Qa) {
+  return {VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1),
+          VecX<double>::Constant(n, Qa), VecX<double>::Constant(n, 1e-4)};
+}
+
+VecX<double> random_vector(std::mt19937& rng, int n, double lo, double hi) {
+  std::uniform_real_distribution<double> u(lo, hi);
+  VecX<double> x(n);
+  for (int i = 0; i < n; ++i) x[i] = u(rng);
+  return x;
+}
+
+}  // namespace idmpc::test

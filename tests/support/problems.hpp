@@ -1,0 +1,33 @@
+#pragma once
+/// @file problems.hpp
+/// @brief Shared fixtures of the OCP and solver tests: a loaded model, the paper's weights,
+/// seeded random vectors.
+
+#include <random>
+#include <string>
+
+#include "idmpc/mujoco/load.hpp"
+#include "idmpc/ocp/ocp.hpp"
+
+namespace idmpc::test {
+
+/// @brief A MuJoCo model and the controller's Model imported from it.
+struct Problem {
+  mj::ModelPtr m;
+  Model model;
+};
+
+/// @brief Loads and imports a model file (throws like the CLI would).
+Problem load_problem(const std::string& path);
+
+/// @brief The paper's weights (DESIGN §7): Q_q = 1, Q_v = 0.1, Q_a, R = 1e-4.
+OcpWeights paper_weights(int n, double Qa = 0.0);
+
+/// @brief n values uniform in [lo, hi].
+VecX<double> random_vector(std::mt19937& rng, int n, double lo, double hi);
+/// @brief n values uniform in [−scale, scale].
+inline VecX<double> random_vector(std::mt19937& rng, int n, double scale) {
+  return random_vector(rng, n, -scale, scale);
+}
+
+}  // namespace idmpc::test
