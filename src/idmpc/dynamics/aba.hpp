@@ -76,4 +76,52 @@ const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::Mat
   return data.Minv_x;
 }
 
+/// @brief data.rhs ← M(q)⁻¹·data.rhs for all its columns (n × m, m ≤ 3n) in one pair of
+/// sweeps of 6×m blocks, reusing the articulated inertias of the last aba(q, ·, ·) call.
+template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& data, int m) {
+  const int n = model.n;
+  auto Y = data.rhs.leftCols(m);
+  for (int i = 0; i < n; ++i) data.Pm[i].leftCols(m).setZero();
+  // backward: articulated bias forces of every load column
+  for (int i = n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    const Vec6<S> Si = model.S[i].template cast<S>();
+    auto P = data.Pm[i].leftCols(m);
+    Y.row(i).noalias() -= Si.transpose() * P;
+    if (p >= 0) {
+      // Pm[p] += X_upᵀ (P + U u / D), force transform of each column
+      const Transform<S>& X = data.X_up[i];
+      auto T = data.Tm.leftCols(m);
+      auto W = data.Wm.leftCols(m);
+      T = P;
+      T.noalias() += Vec6<S>(data.U[i] / data.D[i]) * Y.row(i);
+      W.noalias() = X.E.transpose() * T.template bottomRows<3>();
+      auto Pp = data.Pm[p].leftCols(m);
+      Pp.template bottomRows<3>() += W;
+      Pp.template topRows<3>().noalias() += X.E.transpose() * T.template topRows<3>();
+      Pp.template topRows<3>().noalias() += skew<S>(X.r) * W;
+    }
+  }
+  // forward: accelerations of every column
+  for (int i = 0; i < n; ++i) {
+    const int p = model.parent[i];
+    auto A = data.Am[i].leftCols(m);
+    if (p < 0) {
+      A.setZero();
+    } else {
+      // motion transform of each column: [E ω; E (v − r × ω)]
+      const Transform<S>& X = data.X_up[i];
+      auto Ap = data.Am[p].leftCols(m);
+      auto W = data.Wm.leftCols(m);
+      W = Ap.template bottomRows<3>();
+      W.noalias() -= skew<S>(X.r) * Ap.template topRows<3>();
+      A.template topRows<3>().noalias() = X.E * Ap.template topRows<3>();
+      A.template bottomRows<3>().noalias() = X.E * W;
+    }
+    Y.row(i).noalias() -= data.U[i].transpose() * A;
+    Y.row(i) /= data.D[i];
+    A.noalias() += model.S[i].template cast<S>() * Y.row(i);
+  }
+}
+
 }  // namespace idmpc

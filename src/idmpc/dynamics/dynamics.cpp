@@ -17,6 +17,7 @@ template void rnea_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&
 template void aba_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                               const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
 template void rnea_vjp(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
+template void minv_apply_columns(const Model&, Data&, int);
 template struct DataTpl<double>;
 
 }  // namespace idmpc

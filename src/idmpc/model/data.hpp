@@ -24,7 +24,9 @@ template <typename S> struct DataTpl {
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Minv_x(VecX<S>::Zero(n)) {}
+        pz(n), az(n), Minv_x(VecX<S>::Zero(n)),
+        Pm(n, Block6(6, 3 * n)), Am(n, Block6(6, 3 * n)), Tm(6, 3 * n), Wm(3, 3 * n),
+        rhs(MatX<S>::Zero(n, 3 * n)) {}
 
   int n;
 
@@ -65,6 +67,13 @@ template <typename S> struct DataTpl {
   // M⁻¹x through the ABA factorization
   List<Vec6<S>> pz, az;
   VecX<S> Minv_x;
+
+  // M⁻¹X for up to 3n right-hand sides at once (minv_apply_columns)
+  using Block6 = Eigen::Matrix<S, 6, Eigen::Dynamic>;
+  List<Block6> Pm, Am;
+  Block6 Tm;
+  Eigen::Matrix<S, 3, Eigen::Dynamic> Wm;
+  MatX<S> rhs;
 };
 
 using Data = DataTpl<double>;
