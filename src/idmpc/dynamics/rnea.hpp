@@ -17,25 +17,25 @@ const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
   // forward pass: link velocities, accelerations and body forces
   for (int i = 0; i < model.n; ++i) {
     const int p = model.parent[i];
-    const Vec6<S> Si = model.S[i].template cast<S>();
     data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
-    data.vJ[i] = Si * v[i];
+    data.vJ[i].setZero();
+    add_joint_motion<S>(model, i, S(v[i]), data.vJ[i]);
     if (p < 0) {
       data.V[i] = data.vJ[i];
-      data.A[i] = data.X_up[i].apply_motion(a0) + Si * a[i];
+      data.A[i] = data.X_up[i].apply_motion(a0);
     } else {
       data.V[i] = data.X_up[i].apply_motion(data.V[p]) + data.vJ[i];
-      data.A[i] = data.X_up[i].apply_motion(data.A[p]) + Si * a[i] +
-                  cross_motion<S>(data.V[i], data.vJ[i]);
+      data.A[i] = data.X_up[i].apply_motion(data.A[p]) + cross_motion<S>(data.V[i], data.vJ[i]);
     }
-    const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
+    add_joint_motion<S>(model, i, S(a[i]), data.A[i]);
+    const auto& Ii = cast_inertia<S>(model.I[i]);
     data.h[i] = Ii.apply(data.V[i]);
     data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
   }
   // backward pass: joint torques, subtree forces, armature and passive forces
   for (int i = model.n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    data.tau[i] = model.S[i].template cast<S>().dot(data.F[i]) + model.armature[i] * a[i] +
+    data.tau[i] = joint_project<S>(model, i, data.F[i]) + model.armature[i] * a[i] +
                   model.damping[i] * v[i] + model.stiffness[i] * (q[i] - model.q_spring[i]);
     if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
   }
