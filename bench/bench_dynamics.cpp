@@ -10,6 +10,8 @@
 #include <random>
 #include <string>
 
+#include <utility>
+
 #include "bench_support.hpp"
 #include "idmpc/dynamics/dynamics.hpp"
 
@@ -63,132 +65,105 @@ DynamicsFixture& fixture(const std::string& name) {
   return *slot;
 }
 
-void set_counters(benchmark::State& state, const DynamicsFixture& f) {
-  state.counters["n"] = f.n;
-}
-
-void BM_Rnea(benchmark::State& state, const char* name) {
+// times `call(f)` on the model's fixture; `setup(f)` runs once, outside the timed loop
+template <typename Setup, typename Call>
+void time_kernel(benchmark::State& state, const char* name, Setup&& setup, Call&& call) {
   DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
+  setup(f);
   for (auto _ : state) {
-    const VecX<double>& tau = rnea(model, *f.data, f.q, f.v, f.a);
-    benchmark::DoNotOptimize(tau.data());
+    call(f);
     benchmark::ClobberMemory();
   }
-  set_counters(state, f);
+  state.counters["n"] = f.n;
+}
+template <typename Call> void time_kernel(benchmark::State& state, const char* name, Call&& call) {
+  time_kernel(state, name, [](DynamicsFixture&) {}, std::forward<Call>(call));
+}
+
+const Model& model_of(const DynamicsFixture& f) { return f.bm->model(); }
+
+void BM_Rnea(benchmark::State& state, const char* name) {
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    benchmark::DoNotOptimize(rnea(model_of(f), *f.data, f.q, f.v, f.a).data());
+  });
 }
 
 void BM_Aba(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  for (auto _ : state) {
-    const VecX<double>& qdd = aba(model, *f.data, f.q, f.v, f.tau);
-    benchmark::DoNotOptimize(qdd.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    benchmark::DoNotOptimize(aba(model_of(f), *f.data, f.q, f.v, f.tau).data());
+  });
 }
 
 void BM_Crba(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  for (auto _ : state) {
-    const MatX<double>& M = crba(model, *f.data, f.q);
-    benchmark::DoNotOptimize(M.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    benchmark::DoNotOptimize(crba(model_of(f), *f.data, f.q).data());
+  });
 }
 
 void BM_RneaDerivatives(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  for (auto _ : state) {
-    rnea_derivatives(model, *f.data, f.q, f.v, f.a);
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    rnea_derivatives(model_of(f), *f.data, f.q, f.v, f.a);
     benchmark::DoNotOptimize(f.data->dtau_dq.data());
     benchmark::DoNotOptimize(f.data->dtau_dv.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  });
 }
 
 void BM_AbaDerivatives(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  for (auto _ : state) {
-    aba_derivatives(model, *f.data, f.q, f.v, f.tau);
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    aba_derivatives(model_of(f), *f.data, f.q, f.v, f.tau);
     benchmark::DoNotOptimize(f.data->da_dq.data());
     benchmark::DoNotOptimize(f.data->da_dv.data());
     benchmark::DoNotOptimize(f.data->Minv.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  });
+}
+
+void keep_vjp(DynamicsFixture& f) {
+  benchmark::DoNotOptimize(f.data->g_q.data());
+  benchmark::DoNotOptimize(f.data->g_v.data());
+  benchmark::DoNotOptimize(f.data->g_a.data());
 }
 
 // the adjoint triple (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w as the OCP gets it: the RNEA pass it needs,
 // then the reverse sweep
 void BM_RneaVjp(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  for (auto _ : state) {
-    rnea(model, *f.data, f.q, f.v, f.a);
-    rnea_vjp(model, *f.data, f.w);
-    benchmark::DoNotOptimize(f.data->g_q.data());
-    benchmark::DoNotOptimize(f.data->g_v.data());
-    benchmark::DoNotOptimize(f.data->g_a.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    rnea(model_of(f), *f.data, f.q, f.v, f.a);
+    rnea_vjp(model_of(f), *f.data, f.w);
+    keep_vjp(f);
+  });
 }
 
 // the reverse sweep alone, after one RNEA pass outside the loop
 void BM_RneaVjpSweepOnly(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  rnea(model, *f.data, f.q, f.v, f.a);
-  for (auto _ : state) {
-    rnea_vjp(model, *f.data, f.w);
-    benchmark::DoNotOptimize(f.data->g_q.data());
-    benchmark::DoNotOptimize(f.data->g_v.data());
-    benchmark::DoNotOptimize(f.data->g_a.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { rnea(model_of(f), *f.data, f.q, f.v, f.a); },
+      [](DynamicsFixture& f) {
+        rnea_vjp(model_of(f), *f.data, f.w);
+        keep_vjp(f);
+      });
 }
 
 // M⁻¹x through the articulated inertias of one ABA pass outside the loop
 void BM_MinvApply(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  const Model& model = f.bm->model();
-  aba(model, *f.data, f.q, f.v, f.tau);
-  for (auto _ : state) {
-    const VecX<double>& y = minv_apply(model, *f.data, f.x);
-    benchmark::DoNotOptimize(y.data());
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { aba(model_of(f), *f.data, f.q, f.v, f.tau); },
+      [](DynamicsFixture& f) { benchmark::DoNotOptimize(minv_apply(model_of(f), *f.data, f.x).data()); });
 }
 
 // baseline of RNEA: qfrc_inverse at (qpos, qvel, qacc)
 void BM_MjInverse(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  for (auto _ : state) {
+  time_kernel(state, name, [](DynamicsFixture& f) {
     mj_inverse(f.m.get(), f.d.get());
     benchmark::DoNotOptimize(f.d->qfrc_inverse);
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  });
 }
 
 // baseline of ABA: qacc at (qpos, qvel) with qfrc_applied = τ, no constraints
 void BM_MjForward(benchmark::State& state, const char* name) {
-  DynamicsFixture& f = fixture(name);
-  for (auto _ : state) {
+  time_kernel(state, name, [](DynamicsFixture& f) {
     mj_forward(f.m.get(), f.d.get());
     benchmark::DoNotOptimize(f.d->qacc);
-    benchmark::ClobberMemory();
-  }
-  set_counters(state, f);
+  });
 }
 
 // one case per model: the paper's arm and chains, plus two larger generated chains
