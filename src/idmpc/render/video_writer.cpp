@@ -261,6 +261,10 @@ void VideoWriter::finish() {
                              "': expected exit status 0, got " + describe_status(status) +
                              (tail.empty() ? std::string() : "; ffmpeg said: " + tail));
   }
+  // mkstemps made the file 0600: give the video the permissions of a normally created file
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  ::chmod(tmp_path_.c_str(), 0666 & ~mask);
   if (std::rename(tmp_path_.c_str(), out_path_.c_str()) != 0) {
     const int err = errno;
     abandon();
