@@ -76,7 +76,7 @@ const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::Mat
   return data.Minv_x;
 }
 
-/// @brief data.rhs ← M(q)⁻¹·data.rhs for all its columns (n × m, m ≤ 3n) in one pair of
+/// @brief data.rhs ← M(q)⁻¹·data.rhs for its first m columns (m ≤ n) in one pair of
 /// sweeps of 6×m blocks, reusing the articulated inertias of the last aba(q, ·, ·) call.
 template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& data, int m) {
   const int n = model.n;

@@ -16,19 +16,27 @@
 
 namespace idmpc {
 
+/// @brief ∂q̈/∂q, ∂q̈/∂v and M⁻¹ into data.da_dq, da_dv, Minv. Precondition: data holds
+/// aba(model, data, q, v, τ) at this point (its q̈ and articulated inertias are reused).
+template <typename S, typename Q, typename Vv>
+void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                               const Eigen::MatrixBase<Vv>& v) {
+  rnea_derivatives(model, data, q, v, data.qdd);  // same q: X_up unchanged for the sweep
+  // M⁻¹ by one multi-column sweep through the ABA factorization, then the dense products
+  const int n = model.n;
+  data.rhs.setIdentity();
+  minv_apply_columns(model, data, n);
+  data.Minv = data.rhs;
+  data.da_dq.noalias() = -data.Minv * data.dtau_dq;
+  data.da_dv.noalias() = -data.Minv * data.dtau_dv;
+}
+
 /// @brief Fills data.qdd = FD(q, v, τ), data.da_dq, data.da_dv and data.Minv (= ∂q̈/∂τ).
 template <typename S, typename Q, typename Vv, typename T>
 void aba_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                      const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
   aba(model, data, q, v, tau);
-  rnea_derivatives(model, data, q, v, data.qdd);  // same q: X_up unchanged for the sweep
-  // M⁻¹ by one multi-column sweep through the ABA factorization, then the dense products
-  const int n = model.n;
-  data.rhs.leftCols(n).setIdentity();
-  minv_apply_columns(model, data, n);
-  data.Minv = data.rhs.leftCols(n);
-  data.da_dq.noalias() = -data.Minv * data.dtau_dq;
-  data.da_dv.noalias() = -data.Minv * data.dtau_dv;
+  aba_derivatives_after_aba(model, data, q, v);
 }
 
 }  // namespace idmpc

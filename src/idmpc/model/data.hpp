@@ -25,8 +25,8 @@ template <typename S> struct DataTpl {
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
         pz(n), az(n), Minv_x(VecX<S>::Zero(n)),
-        Pm(n, Block6(6, 3 * n)), Am(n, Block6(6, 3 * n)), Tm(6, 3 * n), Wm(3, 3 * n),
-        rhs(MatX<S>::Zero(n, 3 * n)) {}
+        Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
+        rhs(MatX<S>::Zero(n, n)) {}
 
   int n;
 
@@ -68,7 +68,7 @@ template <typename S> struct DataTpl {
   List<Vec6<S>> pz, az;
   VecX<S> Minv_x;
 
-  // M⁻¹X for up to 3n right-hand sides at once (minv_apply_columns)
+  // M⁻¹X for up to n right-hand sides at once (minv_apply_columns)
   using Block6 = Eigen::Matrix<S, 6, Eigen::Dynamic>;
   List<Block6> Pm, Am;
   Block6 Tm;

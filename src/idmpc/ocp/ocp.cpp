@@ -147,7 +147,7 @@ void Ocp::stage_backward(int i, const VecX<double>& gmm_next, Eigen::Ref<VecX<do
       gv_ = -d.g_v;
       F_i = weights_.R.cwiseProduct(u) + mu;
     } else {
-      aba_derivatives(model_, d, q, v, u);
+      aba_derivatives_after_aba(model_, d, q, v);  // ABA of stage i is in d from the forward sweep
       gq_.noalias() = d.da_dq.transpose() * gmm_next;
       gv_.noalias() = d.da_dv.transpose() * gmm_next;
       F_i = weights_.R.cwiseProduct(u);
