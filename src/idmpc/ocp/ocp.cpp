@@ -102,13 +102,18 @@ void Ocp::batched_stage_dynamics(int stages) {
   }
 }
 
-// forward dynamics: a_i = FD(q_i, v_i, u_i); inverse dynamics: u_i = ID(q_i, v_i, a_i)
+// forward dynamics: a_i = FD(q_i, v_i, u_i); inverse dynamics: u_i = ID(q_i, v_i, a_i), with
+// the RNEA derivatives at once in matrix mode (the rollout does not depend on u)
 void Ocp::stage_forward(int i) {
   Data& d = stage_[i];
   if (formulation_ == Formulation::kForwardDynamics) {
     a_.col(i) = aba(model_, d, q_.col(i), v_.col(i), u_.col(i));
-  } else {
+  } else if (mode_ == DerivativeMode::kAdjoint) {
     u_.col(i) = rnea(model_, d, q_.col(i), v_.col(i), a_.col(i));
+  } else {
+    // the derivatives' forward pass gives τ too: no separate RNEA
+    rnea_derivatives(model_, d, q_.col(i), v_.col(i), a_.col(i));
+    u_.col(i) = d.tau;
   }
 }
 
@@ -131,7 +136,7 @@ void Ocp::stage_backward(int i, const VecX<double>& gmm_next, Eigen::Ref<VecX<do
       gv_ = d.g_v;
       F_i = gmm_next + weights_.Qa.cwiseProduct(a) + d.g_a;
     } else {
-      rnea_derivatives(model_, d, q, v, a);
+      // ∂τ/∂q, ∂τ/∂v and M are in d from the forward sweep
       gq_.noalias() = d.dtau_dq.transpose() * w_;
       gv_.noalias() = d.dtau_dv.transpose() * w_;
       F_i = gmm_next + weights_.Qa.cwiseProduct(a);
