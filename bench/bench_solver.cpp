@@ -30,9 +30,10 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "idmpc/experiment/task.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
-#include "idmpc/ocp/ocp.hpp"
-#include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/controller.hpp"
 
 namespace idmpc::bench {
 namespace {
@@ -41,8 +42,6 @@ namespace {
 constexpr double kRecordSeconds = 0.3;
 constexpr double kRecordBudgetSeconds = 1.5;
 constexpr int kMinRecordedSteps = 20;
-// the paper's fallback weight on a for ID runs that fail with Q_a = 0
-constexpr double kQaFallback = 1e-4;
 
 struct Controller {
   Formulation formulation;
@@ -71,25 +70,12 @@ struct Case {
   }
 };
 
-// paper's weights and swing-up (DESIGN §7)
-OcpWeights paper_weights(int n, double Qa) {
-  return OcpWeights{VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1),
-                    VecX<double>::Constant(n, Qa), VecX<double>::Constant(n, 1e-4)};
-}
-
-VecX<double> swingup_q0(int n) {
-  VecX<double> q0 = VecX<double>::Zero(n);
-  q0[0] = -M_PI;
-  return q0;
-}
-
-CgmresSettings paper_settings(int kmax) {
-  CgmresSettings s;
-  s.kmax = kmax;
-  s.Tf = 0.5;
-  s.alpha = 1.0;
-  s.dt = 1e-3;
-  return s;
+// the paper's task (mjcf/paper_swingup.json) on an n-joint model, with Q_a and kmax set
+ResolvedTask paper_setup(int n, double Qa, int kmax) {
+  ResolvedTask r = resolve(paper_task(), n);
+  r.weights.Qa.setConstant(Qa);
+  r.cgmres.kmax = kmax;
+  return r;
 }
 
 // one controller on one model, the swing-up it produced, and the solver replaying it
@@ -97,7 +83,7 @@ struct SolverFixture {
   decltype(std::declval<Case>().key()) key;
   const BenchModel* bm = nullptr;
   double Qa = 0;
-  std::unique_ptr<Ocp> ocp;
+  std::unique_ptr<SingleShooting> ocp;
   std::unique_ptr<Cgmres> start;  // right after the zero-horizon initialization at t = 0
   std::optional<Cgmres> solver;   // replays the record from `start`
   std::vector<double> t;
@@ -111,11 +97,13 @@ struct SolverFixture {
 // runs the closed loop and records it; returns whether the run diverged
 bool record_swingup(SolverFixture& f, const Case& c) {
   const int n = c.n;
-  const VecX<double> q_ref = VecX<double>::Zero(n), q0 = swingup_q0(n), v0 = VecX<double>::Zero(n);
-  f.ocp = std::make_unique<Ocp>(f.bm->model(), c.controller.formulation, c.controller.mode,
-                                paper_weights(n, f.Qa), q_ref, c.N);
+  const ResolvedTask paper = paper_setup(n, f.Qa, c.kmax);
+  const VecX<double>& q0 = paper.q0;
+  const VecX<double> v0 = VecX<double>::Zero(n);
+  f.ocp = std::make_unique<SingleShooting>(f.bm->model(), c.controller.formulation, c.controller.mode,
+                                           paper.weights, paper.qref, c.N);
   f.ocp->set_stage_batching(c.controller.simd_stages);
-  const CgmresSettings settings = paper_settings(c.kmax);
+  const CgmresSettings& settings = paper.cgmres;
   f.start = std::make_unique<Cgmres>(*f.ocp, settings);
   f.start->initialize(0.0, q0, v0);
 
@@ -133,7 +121,7 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   }
 
   // the swing-up in closed loop, recording each measurement and the solution it produced
-  Cgmres solver(*f.start);
+  idmpc::Controller controller(f.ocp->problem(), settings);
   mj::Plant plant(f.bm->m.get(), f.bm->imported.actuation);
   mj::ClosedLoopSettings loop;
   loop.duration = duration;
@@ -144,12 +132,12 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   f.q.clear();
   f.v.clear();
   f.U.clear();
-  const mj::RunResult result = mj::run_closed_loop(
-      plant, *f.ocp, solver, q_ref, loop, [&](const mj::StepRecord& r) {
+  const mj::RunResult result =
+      mj::run_closed_loop(plant, controller, loop, [&](const mj::StepRecord& r) {
         f.t.push_back(r.t);
         f.q.push_back(r.q);
         f.v.push_back(r.v);
-        f.U.push_back(solver.solution());
+        f.U.push_back(controller.solver().solution());
       });
   // keep the successful updates only
   const size_t ok = result.update_ms.size();
@@ -170,8 +158,9 @@ SolverFixture& fixture(const Case& c) {
   f->key = c.key();
   f->bm = &bench_model(c.n);
   f->Qa = 0;
-  if (record_swingup(*f, c) && c.controller.formulation == Formulation::kInverseDynamics) {
-    f->Qa = kQaFallback;
+  if (record_swingup(*f, c) && c.controller.formulation == Formulation::kInverseDynamics &&
+      paper_task().Qa_fallback > 0) {
+    f->Qa = paper_task().Qa_fallback;
     record_swingup(*f, c);
   }
   f->F = VecX<double>::Zero(f->ocp->dim());
@@ -240,7 +229,7 @@ void BM_Residual(benchmark::State& state, Case c) {
 void BM_StageVectorOps(benchmark::State& state, int n) {
   constexpr int N = 25;
   const double dtau = 0.5 / N;
-  const OcpWeights w8 = paper_weights(n, 0.0);
+  const OcpWeights w8 = paper_setup(n, 0.0, 10).weights;
   const VecX<double> q_ref = VecX<double>::Zero(n);
   VecX<double> U = VecX<double>::Random(N * n), F = VecX<double>::Zero(N * n);
   MatX<double> q = MatX<double>::Random(n, N + 1), v = MatX<double>::Random(n, N + 1);
@@ -285,9 +274,7 @@ void register_all() {
   auto add = [&](int n, int N, int kmax) {
     if (seen.insert({n, N, kmax}).second) cases.emplace_back(n, N, kmax);
   };
-  for (int kmax : {3, 5, 10}) {
-    for (int N : {10, 15, 25, 50}) add(4, N, kmax);  // Tables 1–2
-  }
+  for (const PaperCell& p : load_paper_tables().cells) add(p.n, p.N, p.kmax);  // Tables 1–3
   for (int n : {4, 8, 16, 24, 32, 48, 64}) add(n, 25, 10);  // Table 3 and size scaling
   for (int n : {4, 16}) {
     for (int N : {10, 15, 25, 50, 75, 100}) add(n, N, 10);  // horizon scaling

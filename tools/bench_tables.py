@@ -24,22 +24,37 @@ import tempfile
 
 import matplotlib
 
+from run_record import load_paper_tables
+
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 
 CONTROLLERS = ["fd_matrix", "fd_adjoint", "id_matrix", "id_adjoint", "id_adjoint_scalar"]
 MODES = ["matrix", "adjoint"]
-T12_N = [10, 15, 25, 50]
-T12_KMAX = [3, 5, 10]
 T3_N = [4, 8, 16, 24, 32]
 
-# paper (ms per update, Intel Core i5 2.0 GHz, Pinocchio, matrix derivatives); DESIGN.md sec. 7
-PAPER_T1_FD = {3: [0.37, 0.55, 0.94, 1.8], 5: [0.48, 0.75, 1.2, 2.4], 10: [8.1, 1.2, 2.0, 4.0]}
-PAPER_T2_ID = {3: [0.22, 0.33, 0.58, 1.1], 5: [0.29, 0.45, 0.81, 1.5], 10: [0.47, 0.73, 1.3, 2.5]}
-PAPER_T1_DIVERGED = {(3, N) for N in T12_N} | {(5, N) for N in T12_N}  # '*'
-PAPER_T2_QA = {(3, N) for N in T12_N} | {(5, 50)}  # '+' (needed Q_a = 1e-4)
-PAPER_T3 = {"fd": {8: 4.5, 16: 11, 24: 20, 32: 32}, "id": {8: 2.6, 16: 6.0, 24: 10, 32: 16}}
+
+def paper_tables():
+    """The paper's Tables 1-3 (mjcf/paper_tables.json, the one copy, also read by idmpc)."""
+    cells = load_paper_tables()
+    t12 = [c for c in cells if c["table"] == "12"]
+    n_ = sorted({c["N"] for c in t12})
+    k_ = sorted({c["kmax"] for c in t12})
+
+    def grid(f):
+        by = {(c["kmax"], c["N"]): c for c in t12 if c["formulation"] == f}
+        return ({k: [by[(k, N)]["ms"] for N in n_] for k in k_},
+                {(k, N) for (k, N), c in by.items() if c["mark"]})
+
+    fd, fd_marks = grid("fd")
+    idd, id_marks = grid("id")
+    t3 = {f: {c["n"]: c["ms"] for c in cells if c["table"] == "3" and c["formulation"] == f} for f in ("fd", "id")}
+    return n_, k_, fd, idd, fd_marks, id_marks, t3
+
+
+# paper (ms per update, matrix derivatives): '*' FD diverged, '+' ID needed Q_a = 1e-4
+T12_N, T12_KMAX, PAPER_T1_FD, PAPER_T2_ID, PAPER_T1_DIVERGED, PAPER_T2_QA, PAPER_T3 = paper_tables()
 
 # targets
 T_ID_FD_RATIO = 0.6  # ID/FD per update, matrix mode, every n of Table 3

@@ -12,7 +12,6 @@ to a temporary file and renamed, so a reader never sees a half-written figure.
 """
 
 import argparse
-import csv
 import math
 import os
 import sys
@@ -27,72 +26,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 LINESTYLES = ["-", "--", ":", "-."]
 
 
-class LogError(Exception):
-    """A log that cannot be read; the message names the file."""
-
-
-class Log:
-    """Columns of one closed-loop log."""
-
-    def __init__(self, path, label):
-        self.path = path
-        self.label = label
-        self.n = 0
-        self.t = []
-        self.q = []  # q[j] is the time series of joint j
-        self.v = []
-        self.u = []
-        self.residual = []
-        self.update_ms = []
-
-
-def expected_header(n):
-    return (["t"] + [f"q{j}" for j in range(n)] + [f"v{j}" for j in range(n)]
-            + [f"u{j}" for j in range(n)] + ["residual", "update_ms"])
-
-
-def read_log(path, label):
-    """Reads and validates one log; raises LogError naming the file."""
-    try:
-        with open(path, newline="") as f:
-            rows = list(csv.reader(f))
-    except OSError as err:
-        raise LogError(f"cannot read log '{path}': {err.strerror}") from None
-    if not rows:
-        raise LogError(f"log '{path}' is empty (expected a header t,q0,...,residual,update_ms)")
-    header = [name.strip() for name in rows[0]]
-    ncols = len(header)
-    n = (ncols - 3) // 3
-    if ncols < 6 or (ncols - 3) % 3 != 0 or header != expected_header(n):
-        shown = ",".join(header[:8]) + (",..." if ncols > 8 else "")
-        raise LogError(f"log '{path}' has a malformed header: expected "
-                       "t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms with n >= 1, "
-                       f"got '{shown}' ({ncols} columns)")
-    log = Log(path, label)
-    log.n = n
-    log.q = [[] for _ in range(n)]
-    log.v = [[] for _ in range(n)]
-    log.u = [[] for _ in range(n)]
-    for lineno, row in enumerate(rows[1:], start=2):
-        if not row or all(not cell.strip() for cell in row):
-            continue
-        if len(row) != ncols:
-            raise LogError(f"log '{path}' line {lineno}: expected {ncols} values, got {len(row)}")
-        try:
-            values = [float(cell) for cell in row]
-        except ValueError:
-            raise LogError(f"log '{path}' line {lineno}: not a number in '{','.join(row)[:80]}'") \
-                from None
-        log.t.append(values[0])
-        for j in range(n):
-            log.q[j].append(values[1 + j])
-            log.v[j].append(values[1 + n + j])
-            log.u[j].append(values[1 + 2 * n + j])
-        log.residual.append(values[1 + 3 * n])
-        log.update_ms.append(values[2 + 3 * n])
-    if not log.t:
-        raise LogError(f"log '{path}' has a header but no data rows")
-    return log
+from run_record import LogError, read_log  # noqa: E402
 
 
 def joint_colours(n):

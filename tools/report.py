@@ -3,44 +3,31 @@
 
 Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix,adjoint}.{json,csv}; writes report.md)
 """
-import csv
 import json
 import math
 import os
 import platform
-import re
 import subprocess
 import sys
 
-
-def load_log(path):
-    with open(path, newline="") as f:
-        rows = list(csv.reader(f))
-    header, data = rows[0], [[float(x) for x in r] for r in rows[1:]]
-    n = sum(1 for h in header if re.fullmatch(r"u\d+", h))
-    t = [r[0] for r in data]
-    q = [r[1:1 + n] for r in data]
-    u = [r[1 + 2 * n:1 + 3 * n] for r in data]
-    return t, q, u
+from run_record import load_paper_tables, read_log, read_summary
 
 
 def torque_agreement(log_a, log_b, skip_s=0.0):
     """RMS over time of |u_a − u_b| relative to the RMS of |u_b|, from skip_s on."""
-    ta, _, ua = load_log(log_a)
-    tb, _, ub = load_log(log_b)
+    a, b = read_log(log_a, "a"), read_log(log_b, "b")
     num = den = 0.0
-    for t, a, b in zip(ta, ua, ub):
+    for k, t in enumerate(a.t[:len(b.t)]):
         if t < skip_s:
             continue
-        num += sum((x - y) ** 2 for x, y in zip(a, b))
-        den += sum(y ** 2 for y in b)
+        num += sum((a.u[j][k] - b.u[j][k]) ** 2 for j in range(a.n))
+        den += sum(b.u[j][k] ** 2 for j in range(b.n))
     return math.sqrt(num / den) if den > 0 else float("nan")
 
 
 def max_angle_difference(log_a, log_b):
-    _, qa, _ = load_log(log_a)
-    _, qb, _ = load_log(log_b)
-    return max(abs(x - y) for ra, rb in zip(qa, qb) for x, y in zip(ra, rb))
+    a, b = read_log(log_a, "a"), read_log(log_b, "b")
+    return max(abs(a.q[j][k] - b.q[j][k]) for j in range(a.n) for k in range(min(len(a.t), len(b.t))))
 
 
 def cpu_model():
@@ -71,8 +58,7 @@ def main():
             path = os.path.join(out_dir, f"swingup_{f}_{d}.json")
             if not os.path.exists(path):
                 sys.exit(f"report.py: missing summary '{path}'")
-            with open(path) as fh:
-                runs[(f, d)] = json.load(fh)
+            runs[(f, d)] = read_summary(path)
     lines = ["# idmpc: the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s)", ""]
     lines += [f"Machine: {cpu_model()}, {os.cpu_count()} cores; {compiler()}; Release build "
               "(`-O3`, `-march=native` for this job).", ""]
@@ -84,11 +70,14 @@ def main():
         lines.append(f"| C/GMRES ({f.upper()}) | {d} | {div} | {s['mean_update_ms']:.3f} | "
                      f"{s['p50_update_ms']:.3f} | {s['p95_update_ms']:.3f} | {s['evaluations_per_update']} | "
                      f"{s['final_q_error']:.2e} | {s['final_v_norm']:.2e} | {s['mean_residual']:.2e} |")
+    paper = {c["formulation"]: c["ms"] for c in load_paper_tables()
+             if c["table"] == "12" and c["N"] == 25 and c["kmax"] == 10}
     lines += ["", "Ratio ID/FD of the mean (p50) time per update, measured side by side in this run:", ""]
     for d in ("matrix", "adjoint"):
         fd, idd = runs[("fd", d)], runs[("id", d)]
         lines.append(f"- {d}: {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
-                     f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); the paper (N = 25, kmax = 10): 1.3/2.0 = 0.65")
+                     f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); the paper (N = 25, kmax = 10): "
+                     f"{paper['id']}/{paper['fd']} = {paper['id'] / paper['fd']:.2f}")
     lines += ["", "Same control from both formulations (Q_a = 0): relative RMS difference of the torque "
               "histories, RMS of |u_ID − u_FD| over RMS of |u_FD|:", ""]
     for d in ("matrix", "adjoint"):

@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "app/atomic_file.hpp"
@@ -41,28 +42,18 @@ struct CellResult {
   double diverged_at = NAN, mean_ms = NAN, p95_ms = NAN, final_q_error = NAN, final_v_norm = NAN;
 };
 
-// the paper's ms per update (Intel Core i5 2.0 GHz, Pinocchio); * FD diverged, † ID needed Qa
+// the paper's figure for a cell (mjcf/paper_tables.json)
 struct PaperFigure {
   double ms;
-  const char* note;
+  std::string note;
 };
-PaperFigure paper_figure(const Cell& c) {
-  static const std::map<std::string, PaperFigure> table = {
-      {"fd|3|10", {0.37, "*"}}, {"fd|3|15", {0.55, "*"}}, {"fd|3|25", {0.94, "*"}}, {"fd|3|50", {1.8, "*"}},
-      {"fd|5|10", {0.48, "*"}}, {"fd|5|15", {0.75, "*"}}, {"fd|5|25", {1.2, "*"}}, {"fd|5|50", {2.4, "*"}},
-      {"fd|10|10", {8.1, ""}}, {"fd|10|15", {1.2, ""}}, {"fd|10|25", {2.0, ""}}, {"fd|10|50", {4.0, ""}},
-      {"id|3|10", {0.22, "†"}}, {"id|3|15", {0.33, "†"}}, {"id|3|25", {0.58, "†"}}, {"id|3|50", {1.1, "†"}},
-      {"id|5|10", {0.29, ""}}, {"id|5|15", {0.45, ""}}, {"id|5|25", {0.81, ""}}, {"id|5|50", {1.5, "†"}},
-      {"id|10|10", {0.47, ""}}, {"id|10|15", {0.73, ""}}, {"id|10|25", {1.3, ""}}, {"id|10|50", {2.5, ""}},
-      {"fd|n8", {4.5, ""}}, {"fd|n16", {11, ""}}, {"fd|n24", {20, ""}}, {"fd|n32", {32, ""}},
-      {"id|n8", {2.6, ""}}, {"id|n16", {6.0, ""}}, {"id|n24", {10, ""}}, {"id|n32", {16, ""}}};
-  const std::string key = c.table == "3" ? c.formulation + "|n" + std::to_string(c.n)
-                                         : c.formulation + "|" + std::to_string(c.kmax) + "|" + std::to_string(c.N);
-  const auto it = table.find(key);
-  return it == table.end() ? PaperFigure{NAN, ""} : it->second;
+PaperFigure paper_figure(const PaperTables& tables, const Cell& c) {
+  const PaperCell* p = tables.find(c.table, c.formulation, c.n, c.N, c.kmax);
+  return p ? PaperFigure{p->ms, p->mark} : PaperFigure{NAN, ""};
 }
 
-std::vector<Cell> grid(const SweepOptions& opt) {
+// the paper's cells, in the file's order, for the chosen tables and derivative modes
+std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
   std::vector<std::string> modes;
   if (opt.derivatives == "both") {
     modes = {"matrix", "adjoint"};
@@ -75,19 +66,9 @@ std::vector<Cell> grid(const SweepOptions& opt) {
   }
   std::vector<Cell> cells;
   for (const auto& mode : modes) {
-    if (opt.tables != "3") {
-      for (int kmax : {3, 5, 10}) {
-        for (int N : {10, 15, 25, 50}) {
-          for (const char* f : {"fd", "id"}) cells.push_back({"12", "arm4.xml", f, mode, 4, N, kmax});
-        }
-      }
-    }
-    if (opt.tables != "12") {
-      for (int n : {8, 16, 24, 32}) {
-        for (const char* f : {"fd", "id"}) {
-          cells.push_back({"3", "chain" + std::to_string(n) + ".xml", f, mode, n, 25, 10});
-        }
-      }
+    for (const PaperCell& p : tables.cells) {
+      if (opt.tables != "all" && p.table != opt.tables) continue;
+      cells.push_back({p.table, p.model, p.formulation, mode, p.n, p.N, p.kmax});
     }
   }
   return cells;
@@ -97,8 +78,8 @@ const char* kCsvHeader =
     "table,model,n,formulation,derivatives,N,kmax,Qa,diverged,diverged_at,mean_update_ms,"
     "p95_update_ms,final_q_error,final_v_norm,paper_ms,paper_note";
 
-std::string csv_row(const CellResult& r) {
-  const PaperFigure p = paper_figure(r.cell);
+std::string csv_row(const PaperTables& tables, const CellResult& r) {
+  const PaperFigure p = paper_figure(tables, r.cell);
   std::ostringstream o;
   o << std::setprecision(8) << r.cell.table << ',' << r.cell.model << ',' << r.cell.n << ','
     << r.cell.formulation << ',' << r.cell.derivatives << ',' << r.cell.N << ',' << r.cell.kmax << ','
@@ -145,107 +126,137 @@ std::string fmt(double x, int precision = 3) {
 }
 
 // one cell of a Markdown table: ours (paper), with the paper's marks
-std::string md_cell(const CellResult* r) {
+std::string md_cell(const PaperTables& tables, const CellResult* r) {
   if (!r) return "–";
-  const PaperFigure p = paper_figure(r->cell);
+  const PaperFigure p = paper_figure(tables, r->cell);
   std::string s = fmt(r->mean_ms) + (r->diverged ? "*" : "") + (r->Qa > 0 ? "†" : "");
   return s + " (" + fmt(p.ms) + p.note + ")";
 }
 
-std::string markdown(const std::vector<Cell>& cells, const std::map<std::string, CellResult>& done,
-                     const SweepOptions& opt) {
+// the distinct values of a field over a table's paper cells, ascending
+template <typename Field>
+std::vector<int> axis(const PaperTables& tables, const std::string& table, Field field) {
+  std::set<int> values;
+  for (const PaperCell& p : tables.cells) {
+    if (p.table == table) values.insert(field(p));
+  }
+  return {values.begin(), values.end()};
+}
+
+// the paper's cell of a table at (n, N, kmax), for its model name
+const PaperCell& paper_cell(const PaperTables& tables, const std::string& table, int n, int N, int kmax) {
+  for (const PaperCell& p : tables.cells) {
+    if (p.table == table && p.n == n && p.N == N && p.kmax == kmax) return p;
+  }
+  throw std::logic_error("no paper cell for table " + table);
+}
+
+std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
+                     const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
   auto find = [&](const Cell& c) -> const CellResult* {
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
   };
+  auto cell = [&](const std::string& table, const std::string& f, const std::string& mode, int n, int N, int kmax) {
+    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, n, N, kmax};
+  };
+  // ours (paper) for the ID/FD ratio of one grid point
+  auto ratio = [&](const std::string& table, const std::string& mode, int n, int N, int kmax) {
+    const Cell cf = cell(table, "fd", mode, n, N, kmax), ci = cell(table, "id", mode, n, N, kmax);
+    const CellResult *rf = find(cf), *ri = find(ci);
+    return fmt(rf && ri ? ri->mean_ms / rf->mean_ms : NAN, 2) + " (" +
+           fmt(paper_figure(tables, ci).ms / paper_figure(tables, cf).ms, 2) + ")";
+  };
   std::ostringstream o;
   o << "# idmpc sweep: mean ms per control update, ours (paper)\n\n"
     << "Closed-loop swing-up, " << opt.duration << " s simulated, MuJoCo plant. "
-    << "`*` diverged (time averaged until divergence), `†` ID needed Q_a = 1e-4 I "
-    << "(the paper's fallback). The paper's figures are from an Intel Core i5 2.0 GHz with "
-    << "Pinocchio: compare ratios, not absolute times.\n";
+    << "`*` diverged (time averaged until divergence), `†` ID needed the fallback Q_a "
+    << "(the paper's rule). The paper's figures are from " << tables.machine
+    << ": compare ratios, not absolute times.\n";
   for (const std::string mode : {"matrix", "adjoint"}) {
     const bool any = std::any_of(cells.begin(), cells.end(), [&](const Cell& c) { return c.derivatives == mode; });
     if (!any) continue;
     if (opt.tables != "3") {
+      const std::vector<int> Ns = axis(tables, "12", [](const PaperCell& p) { return p.N; });
+      const std::vector<int> kmaxs = axis(tables, "12", [](const PaperCell& p) { return p.kmax; });
+      const int n = axis(tables, "12", [](const PaperCell& p) { return p.n; }).front();
+      std::string head = "\n\n|";
+      for (int N : Ns) head += " | N=" + std::to_string(N);
+      head += " |\n|---";
+      for (size_t k = 0; k < Ns.size(); ++k) head += "|---";
+      head += "|\n";
+      const std::string model = paper_cell(tables, "12", n, Ns.front(), kmaxs.front()).model;
       for (const char* f : {"fd", "id"}) {
-        o << "\n## Table " << (std::string(f) == "fd" ? "1: C/GMRES (FD)" : "2: C/GMRES (ID)")
-          << ", arm4, derivatives: " << mode << "\n\n| | N=10 | N=15 | N=25 | N=50 |\n|---|---|---|---|---|\n";
-        for (int kmax : {3, 5, 10}) {
+        o << "\n## Table " << (std::string(f) == "fd" ? "1: C/GMRES (FD)" : "2: C/GMRES (ID)") << ", "
+          << model << ", derivatives: " << mode << head;
+        for (int kmax : kmaxs) {
           o << "| kmax=" << kmax;
-          for (int N : {10, 15, 25, 50}) o << " | " << md_cell(find({"12", "arm4.xml", f, mode, 4, N, kmax}));
+          for (int N : Ns) o << " | " << md_cell(tables, find(cell("12", f, mode, n, N, kmax)));
           o << " |\n";
         }
       }
-      o << "\n## Ratio ID/FD, arm4, derivatives: " << mode << ", ours (paper)\n\n"
-        << "| | N=10 | N=15 | N=25 | N=50 |\n|---|---|---|---|---|\n";
-      for (int kmax : {3, 5, 10}) {
+      o << "\n## Ratio ID/FD, " << model << ", derivatives: " << mode << ", ours (paper)" << head;
+      for (int kmax : kmaxs) {
         o << "| kmax=" << kmax;
-        for (int N : {10, 15, 25, 50}) {
-          const Cell cf{"12", "arm4.xml", "fd", mode, 4, N, kmax}, ci{"12", "arm4.xml", "id", mode, 4, N, kmax};
-          const CellResult *rf = find(cf), *ri = find(ci);
-          const double ours = rf && ri ? ri->mean_ms / rf->mean_ms : NAN;
-          o << " | " << fmt(ours, 2) << " (" << fmt(paper_figure(ci).ms / paper_figure(cf).ms, 2) << ")";
-        }
+        for (int N : Ns) o << " | " << ratio("12", mode, n, N, kmax);
         o << " |\n";
       }
     }
     if (opt.tables != "12") {
-      o << "\n## Table 3: N = 25, kmax = 10, derivatives: " << mode
-        << "\n\n| | n=8 | n=16 | n=24 | n=32 |\n|---|---|---|---|---|\n";
+      const std::vector<int> ns = axis(tables, "3", [](const PaperCell& p) { return p.n; });
+      const int N = axis(tables, "3", [](const PaperCell& p) { return p.N; }).front();
+      const int kmax = axis(tables, "3", [](const PaperCell& p) { return p.kmax; }).front();
+      o << "\n## Table 3: N = " << N << ", kmax = " << kmax << ", derivatives: " << mode << "\n\n|";
+      for (int n : ns) o << " | n=" << n;
+      o << " |\n|---";
+      for (size_t k = 0; k < ns.size(); ++k) o << "|---";
+      o << "|\n";
       for (const char* f : {"fd", "id"}) {
         o << "| C/GMRES (" << (std::string(f) == "fd" ? "FD" : "ID") << ")";
-        for (int n : {8, 16, 24, 32}) {
-          o << " | " << md_cell(find({"3", "chain" + std::to_string(n) + ".xml", f, mode, n, 25, 10}));
-        }
+        for (int n : ns) o << " | " << md_cell(tables, find(cell("3", f, mode, n, N, kmax)));
         o << " |\n";
       }
       o << "| ratio ID/FD";
-      for (int n : {8, 16, 24, 32}) {
-        const Cell cf{"3", "chain" + std::to_string(n) + ".xml", "fd", mode, n, 25, 10};
-        const Cell ci{"3", "chain" + std::to_string(n) + ".xml", "id", mode, n, 25, 10};
-        const CellResult *rf = find(cf), *ri = find(ci);
-        o << " | " << fmt(rf && ri ? ri->mean_ms / rf->mean_ms : NAN, 2) << " ("
-          << fmt(paper_figure(ci).ms / paper_figure(cf).ms, 2) << ")";
-      }
+      for (int n : ns) o << " | " << ratio("3", mode, n, N, kmax);
       o << " |\n";
     }
   }
   return o.str();
 }
 
-CellResult run_cell(const Cell& c, const SweepOptions& opt, double Qa) {
-  SwingupOptions s;
-  s.model = opt.models_dir + "/" + c.model;
-  s.formulation = c.formulation;
-  s.derivatives = c.derivatives;
-  s.N = c.N;
-  s.kmax = c.kmax;
-  s.duration = opt.duration;
-  s.Qa = {Qa};
+CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt, double Qa) {
+  Task task = base;
+  task.model = opt.models_dir + "/" + c.model;
+  task.formulation = c.formulation;
+  task.derivatives = c.derivatives;
+  task.N = c.N;
+  task.kmax = c.kmax;
+  task.duration = opt.duration;
+  task.Qa = {Qa};
   std::string log;
   if (opt.logs) {
     log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.size() - 4) + "_" +
           c.formulation + "_" + c.derivatives + "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) + ".csv";
   }
-  const SwingupOutcome out = run_swingup(s, log);
-  const auto& j = out.summary;
+  const RunSummary s = run_swingup(task, log).summary;
   CellResult r;
   r.cell = c;
   r.Qa = Qa;
-  r.diverged = j["diverged"].get<bool>();
-  r.diverged_at = r.diverged ? j["diverged_at"].get<double>() : NAN;
-  r.mean_ms = j["mean_update_ms"].get<double>();
-  r.p95_ms = j["p95_update_ms"].get<double>();
-  r.final_q_error = j["final_q_error"].get<double>();
-  r.final_v_norm = j["final_v_norm"].get<double>();
+  r.diverged = s.diverged;
+  r.diverged_at = s.diverged ? s.diverged_at : NAN;
+  r.mean_ms = s.mean_update_ms;
+  r.p95_ms = s.p95_update_ms;
+  r.final_q_error = s.final_q_error;
+  r.final_v_norm = s.final_v_norm;
   return r;
 }
 
 void run(const SweepOptions& opt) {
   namespace fs = std::filesystem;
   if (!(opt.duration > 0)) throw std::invalid_argument("--duration must be positive");
-  const std::vector<Cell> cells = grid(opt);
+  const PaperTables tables = load_paper_tables();
+  const Task base = load_task(tables.task);
+  const std::vector<Cell> cells = grid(opt, tables);
   for (const Cell& c : cells) {
     if (!fs::exists(opt.models_dir + "/" + c.model)) {
       throw std::invalid_argument("model '" + opt.models_dir + "/" + c.model + "' not found (see --models)");
@@ -261,7 +272,7 @@ void run(const SweepOptions& opt) {
     f.stream() << kCsvHeader << '\n';
     for (const Cell& c : cells) {
       const auto it = done.find(c.key());
-      if (it != done.end()) f.stream() << csv_row(it->second) << '\n';
+      if (it != done.end()) f.stream() << csv_row(tables, it->second) << '\n';
     }
     f.commit();
   }
@@ -275,24 +286,24 @@ void run(const SweepOptions& opt) {
       std::fprintf(stderr, "done earlier\n");
       continue;
     }
-    CellResult r = run_cell(c, opt, 0.0);
-    // the paper's rule: ID that fails with Q_a = 0 is rerun with Q_a = 1e-4 I
-    if (r.diverged && c.formulation == "id") {
-      std::fprintf(stderr, "diverged at %.3f s with Qa = 0, rerun with Qa = 1e-4: ", r.diverged_at);
-      r = run_cell(c, opt, 1e-4);
+    CellResult r = run_cell(base, c, opt, 0.0);
+    // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
+    if (r.diverged && c.formulation == "id" && base.Qa_fallback > 0) {
+      std::fprintf(stderr, "diverged at %.3f s with Qa = 0, rerun with Qa = %g: ", r.diverged_at, base.Qa_fallback);
+      r = run_cell(base, c, opt, base.Qa_fallback);
     }
     std::fprintf(stderr, "%.4g ms per update, %s\n", r.mean_ms,
                  r.diverged ? ("diverged at " + fmt(r.diverged_at) + " s").c_str() : "ok");
-    append << csv_row(r) << '\n' << std::flush;
+    append << csv_row(tables, r) << '\n' << std::flush;
     done[c.key()] = r;
     AtomicFile f(md);
-    f.stream() << markdown(cells, done, opt);
+    f.stream() << markdown(tables, cells, done, opt);
     f.commit();
   }
   AtomicFile f(md);
-  f.stream() << markdown(cells, done, opt);
+  f.stream() << markdown(tables, cells, done, opt);
   f.commit();
-  std::cout << markdown(cells, done, opt) << "\nwritten: " << md << ", " << csv << "\n";
+  std::cout << markdown(tables, cells, done, opt) << "\nwritten: " << md << ", " << csv << "\n";
 }
 
 }  // namespace
@@ -301,7 +312,7 @@ void register_sweep(CLI::App& app) {
   auto opt = std::make_shared<SweepOptions>();
   CLI::App* sub = app.add_subcommand("sweep", "The paper's grids closed-loop (Tables 1-3), resumable");
   sub->add_option("--out", opt->out_dir, "output directory (sweep.csv, sweep.md)")->capture_default_str();
-  sub->add_option("--models", opt->models_dir, "directory with arm4.xml and chain{8,16,24,32}.xml")
+  sub->add_option("--models", opt->models_dir, "directory with the models of mjcf/paper_tables.json")
       ->capture_default_str();
   sub->add_option("--tables", opt->tables, "12 (arm4 N x kmax), 3 (n = 8..32) or all")->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();

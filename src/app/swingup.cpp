@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iomanip>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
@@ -10,166 +11,108 @@
 #include "idmpc/mujoco/load.hpp"
 
 namespace idmpc::app {
-namespace {
 
-// a scalar broadcast to every joint, or exactly one value per joint
-VecX<double> per_joint(const std::vector<double>& values, int n, const std::string& option) {
-  if (values.size() == 1) return VecX<double>::Constant(n, values[0]);
-  if (static_cast<int>(values.size()) == n) {
-    return Eigen::Map<const VecX<double>>(values.data(), n);
+void add_task_options(CLI::App& sub, TaskOverrides& o) {
+  Task& t = o.values;
+  sub.add_option("model", o.model, "MJCF/URDF model file (default: the task's model)");
+  sub.add_option("--task", o.task_file,
+                 "task file (JSON; default: the paper's swing-up, mjcf/paper_swingup.json)");
+  // each option writes into `values`; the applier copies that field into the task
+  auto add = [&](CLI::Option* opt, void (*apply)(const Task&, Task&)) { o.given.emplace_back(opt, apply); };
+  add(sub.add_option("--formulation", t.formulation, "fd (torques, ABA) or id (accelerations, RNEA)"),
+      [](const Task& s, Task& d) { d.formulation = s.formulation; });
+  add(sub.add_option("--derivatives", t.derivatives, "matrix (the paper's) or adjoint (O(n))"),
+      [](const Task& s, Task& d) { d.derivatives = s.derivatives; });
+  add(sub.add_option("--N", t.N, "horizon steps"), [](const Task& s, Task& d) { d.N = s.N; });
+  add(sub.add_option("--kmax", t.kmax, "GMRES iterations per update"), [](const Task& s, Task& d) { d.kmax = s.kmax; });
+  add(sub.add_option("--Tf", t.Tf, "final horizon length [s]"), [](const Task& s, Task& d) { d.Tf = s.Tf; });
+  add(sub.add_option("--alpha", t.alpha, "horizon growth rate [1/s]"), [](const Task& s, Task& d) { d.alpha = s.alpha; });
+  add(sub.add_option("--dt", t.dt, "sampling period and plant step [s]"), [](const Task& s, Task& d) { d.dt = s.dt; });
+  add(sub.add_option("--zeta", t.zeta, "C/GMRES stabilization (0: 1/dt)"), [](const Task& s, Task& d) { d.zeta = s.zeta; });
+  add(sub.add_option("--h", t.h, "forward-difference increment of the Frechet products"),
+      [](const Task& s, Task& d) { d.h = s.h; });
+  add(sub.add_option("--duration", t.duration, "simulated time [s]"),
+      [](const Task& s, Task& d) { d.duration = s.duration; });
+  add(sub.add_option("--q0", t.q0, "initial joint positions, one per joint"), [](const Task& s, Task& d) {
+    d.q0 = s.q0;
+    d.q0_rule.clear();
+  });
+  add(sub.add_option("--qref", t.qref, "target joint positions: a scalar or one per joint"),
+      [](const Task& s, Task& d) { d.qref = s.qref; });
+  add(sub.add_option("--Qq", t.Qq, "weight on q - qref: scalar or one per joint"), [](const Task& s, Task& d) { d.Qq = s.Qq; });
+  add(sub.add_option("--Qv", t.Qv, "weight on v: scalar or one per joint"), [](const Task& s, Task& d) { d.Qv = s.Qv; });
+  add(sub.add_option("--Qa", t.Qa, "weight on a (ID only): scalar or one per joint"),
+      [](const Task& s, Task& d) { d.Qa = s.Qa; });
+  add(sub.add_option("--R", t.R, "weight on torque: scalar or one per joint"), [](const Task& s, Task& d) { d.R = s.R; });
+  add(sub.add_flag("--direct-torque", t.direct_torque,
+                   "ignore the model's actuators and apply joint torques directly"),
+      [](const Task& s, Task& d) { d.direct_torque = s.direct_torque; });
+  add(sub.add_flag("!--no-simd-stages", t.simd_stages,
+                   "ID + adjoint: evaluate the horizon stages one by one instead of in SIMD lanes"),
+      [](const Task& s, Task& d) { d.simd_stages = s.simd_stages; });
+}
+
+Task make_task(const TaskOverrides& o) {
+  Task task = o.task_file.empty() ? paper_task() : load_task(o.task_file);
+  if (!o.model.empty()) task.model = o.model;
+  for (const auto& [option, apply] : o.given) {
+    if (option->count() > 0) apply(o.values, task);
   }
-  throw std::invalid_argument(option + " has " + std::to_string(values.size()) +
-                              " values, expected 1 or " + std::to_string(n) + " (one per joint)");
+  return task;
 }
 
-VecX<double> non_negative(VecX<double> x, const std::string& option) {
-  for (int i = 0; i < x.size(); ++i) {
-    if (!(x[i] >= 0) || !std::isfinite(x[i])) {
-      throw std::invalid_argument(option + " must be finite and non-negative, got " + std::to_string(x[i]));
-    }
-  }
-  return x;
-}
-
-nlohmann::json to_json(const VecX<double>& x) { return std::vector<double>(x.data(), x.data() + x.size()); }
-
-}  // namespace
-
-void add_swingup_options(CLI::App& sub, SwingupOptions& opt) {
-  sub.add_option("--formulation", opt.formulation, "fd (torques, ABA) or id (accelerations, RNEA)")
-      ->capture_default_str();
-  sub.add_option("--derivatives", opt.derivatives, "matrix (the paper's) or adjoint (O(n))")
-      ->capture_default_str();
-  sub.add_option("--N", opt.N, "horizon steps")->capture_default_str();
-  sub.add_option("--kmax", opt.kmax, "GMRES iterations per update")->capture_default_str();
-  sub.add_option("--Tf", opt.Tf, "final horizon length [s]")->capture_default_str();
-  sub.add_option("--alpha", opt.alpha, "horizon growth rate [1/s]")->capture_default_str();
-  sub.add_option("--dt", opt.dt, "sampling period and plant step [s]")->capture_default_str();
-  sub.add_option("--zeta", opt.zeta, "C/GMRES stabilization (0: 1/dt)")->capture_default_str();
-  sub.add_option("--h", opt.h, "forward-difference increment of the Frechet products")->capture_default_str();
-  sub.add_option("--duration", opt.duration, "simulated time [s]")->capture_default_str();
-  sub.add_option("--q0", opt.q0, "initial joint positions, one per joint (default -pi, 0, ...)");
-  sub.add_option("--qref", opt.qref, "target joint positions: a scalar or one per joint (default 0)");
-  sub.add_option("--Qq", opt.Qq, "weight on q - qref: scalar or one per joint")->capture_default_str();
-  sub.add_option("--Qv", opt.Qv, "weight on v: scalar or one per joint")->capture_default_str();
-  sub.add_option("--Qa", opt.Qa, "weight on a (ID only): scalar or one per joint")->capture_default_str();
-  sub.add_option("--R", opt.R, "weight on torque: scalar or one per joint")->capture_default_str();
-  sub.add_flag("--direct-torque", opt.direct_torque,
-               "ignore the model's actuators and apply joint torques directly");
-  sub.add_flag("!--no-simd-stages", opt.simd_stages,
-               "ID + adjoint: evaluate the horizon stages one by one instead of in SIMD lanes");
-}
-
-SwingupOutcome run_swingup(const SwingupOptions& opt, const std::string& log_path) {
+SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   // validate everything before any output is opened
-  const Formulation formulation = parse_formulation(opt.formulation);
-  const DerivativeMode mode = parse_derivative_mode(opt.derivatives);
-  if (opt.N < 1) throw std::invalid_argument("--N must be at least 1, got " + std::to_string(opt.N));
-  CgmresSettings cs;
-  cs.kmax = opt.kmax;
-  cs.Tf = opt.Tf;
-  cs.alpha = opt.alpha;
-  cs.dt = opt.dt;
-  cs.zeta = opt.zeta;
-  cs.h = opt.h;
-  cs.validate();
-  if (!(opt.duration > 0) || !std::isfinite(opt.duration)) {
-    throw std::invalid_argument("--duration must be positive, got " + std::to_string(opt.duration));
-  }
-  const mj::ModelPtr m = mj::load_model(opt.model);
-  const mj::ImportedModel imported =
-      mj::import_model(m.get(), opt.model, mj::ImportOptions{opt.direct_torque});
+  const mj::ModelPtr m = mj::load_model(task.model);
+  const mj::ImportedModel imported = mj::import_model(m.get(), task.model, mj::ImportOptions{task.direct_torque});
   const Model& model = imported.model;
   const int n = model.n;
-  OcpWeights w{non_negative(per_joint(opt.Qq, n, "--Qq"), "--Qq"),
-               non_negative(per_joint(opt.Qv, n, "--Qv"), "--Qv"),
-               non_negative(per_joint(opt.Qa, n, "--Qa"), "--Qa"),
-               non_negative(per_joint(opt.R, n, "--R"), "--R")};
-  const VecX<double> q_ref = opt.qref.empty() ? VecX<double>::Zero(n) : per_joint(opt.qref, n, "--qref");
-  VecX<double> q0 = VecX<double>::Zero(n);
-  q0[0] = -M_PI;
-  if (!opt.q0.empty()) {
-    if (static_cast<int>(opt.q0.size()) != n) {
-      throw std::invalid_argument("--q0 has " + std::to_string(opt.q0.size()) + " values, expected " +
-                                  std::to_string(n) + " (one per joint)");
-    }
-    q0 = Eigen::Map<const VecX<double>>(opt.q0.data(), n);
-  }
-  if (!q0.allFinite() || !q_ref.allFinite()) throw std::invalid_argument("--q0/--qref must be finite");
+  const ResolvedTask r = resolve(task, n);
 
-  Ocp ocp(model, formulation, mode, w, q_ref, opt.N);
-  ocp.set_stage_batching(opt.simd_stages);
-  Cgmres solver(ocp, cs);
+  Controller controller(OcpProblem(model, r.formulation, r.derivatives, r.weights, r.qref, task.N), r.cgmres);
+  controller.nlp().set_stage_batching(task.simd_stages);
   mj::Plant plant(m.get(), imported.actuation);
   mj::ClosedLoopSettings ls;
-  ls.duration = opt.duration;
-  ls.q0 = q0;
+  ls.duration = task.duration;
+  ls.q0 = r.q0;
   ls.v0 = VecX<double>::Zero(n);
 
   // the log streams to a temporary file, renamed once the run has ended
   std::optional<AtomicFile> log;
+  std::optional<RunLogWriter> writer;
   if (!log_path.empty()) {
     log.emplace(log_path);
-    auto& out = log->stream();
-    out << "t";
-    for (const char* p : {"q", "v", "u"}) {
-      for (int i = 0; i < n; ++i) out << ',' << p << i;
-    }
-    out << ",residual,update_ms\n" << std::setprecision(10);
+    writer.emplace(log->stream(), n);
   }
-  auto on_step = [&](const mj::StepRecord& r) {
-    if (!log) return;
-    auto& out = log->stream();
-    out << r.t;
-    for (const VecX<double>* x : {&r.q, &r.v, &r.u}) {
-      for (int i = 0; i < n; ++i) out << ',' << (*x)[i];
-    }
-    out << ',' << r.residual << ',' << r.update_ms << '\n';
+  auto on_step = [&](const mj::StepRecord& s) {
+    if (writer) writer->row(s.t, s.q, s.v, s.u, s.residual, s.update_ms);
   };
-  mj::RunResult result = mj::run_closed_loop(plant, ocp, solver, q_ref, ls, on_step);
+  mj::RunResult result = mj::run_closed_loop(plant, controller, ls, on_step);
   if (log) log->commit();
 
-  nlohmann::json s;
-  s["model"] = opt.model;
-  s["n"] = n;
-  s["formulation"] = opt.formulation;
-  s["derivatives"] = opt.derivatives;
-  s["simd_stages"] = ocp.stage_batching();
-  s["N"] = opt.N;
-  s["kmax"] = opt.kmax;
-  s["Tf"] = opt.Tf;
-  s["alpha"] = opt.alpha;
-  s["dt"] = opt.dt;
-  s["zeta"] = solver.settings().zeta;
-  s["h"] = opt.h;
-  s["Qq"] = to_json(w.Qq);
-  s["Qv"] = to_json(w.Qv);
-  s["Qa"] = to_json(w.Qa);
-  s["R"] = to_json(w.R);
-  s["q0"] = to_json(q0);
-  s["qref"] = to_json(q_ref);
-  s["duration"] = opt.duration;
-  s["steps"] = result.steps;
-  s["diverged"] = result.diverged;
-  s["diverged_at"] = result.diverged ? nlohmann::json(result.diverged_at) : nlohmann::json(nullptr);
-  s["divergence_reason"] = result.divergence_reason;
-  s["mean_update_ms"] = result.update_ms.empty() ? 0.0 : [&] {
-    double sum = 0;
-    for (double x : result.update_ms) sum += x;
-    return sum / static_cast<double>(result.update_ms.size());
-  }();
-  s["p50_update_ms"] = mj::percentile(result.update_ms, 50);
-  s["p95_update_ms"] = mj::percentile(result.update_ms, 95);
-  s["max_update_ms"] = mj::percentile(result.update_ms, 100);
-  s["phase_ms"] = {{"rollout", result.mean_phase_ms.rollout},
-                   {"costate", result.mean_phase_ms.costate},
-                   {"gmres", result.mean_phase_ms.gmres}};
-  s["evaluations_per_update"] = result.evaluations_per_update;
-  s["init_residual"] = result.init_residual;
-  s["final_q_error"] = result.final_q_error;
-  s["final_v_norm"] = result.final_v_norm;
-  s["mean_residual"] = result.mean_residual;
-  s["unmodeled"] = imported.unmodeled;
+  RunSummary s;
+  s.task = task;
+  s.n = n;
+  s.simd_stages = controller.nlp().stage_batching();
+  s.zeta = controller.solver().settings().zeta;
+  s.steps = result.steps;
+  s.diverged = result.diverged;
+  s.diverged_at = result.diverged_at;
+  s.divergence_reason = result.divergence_reason;
+  const auto& ms = result.update_ms;
+  s.mean_update_ms = ms.empty() ? 0.0 : std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
+  s.p50_update_ms = mj::percentile(ms, 50);
+  s.p95_update_ms = mj::percentile(ms, 95);
+  s.max_update_ms = mj::percentile(ms, 100);
+  s.rollout_ms = result.mean_phase_ms.rollout;
+  s.costate_ms = result.mean_phase_ms.costate;
+  s.gmres_ms = result.mean_phase_ms.gmres;
+  s.evaluations_per_update = result.evaluations_per_update;
+  s.init_residual = result.init_residual;
+  s.final_q_error = result.final_q_error;
+  s.final_v_norm = result.final_v_norm;
+  s.mean_residual = result.mean_residual;
+  s.unmodeled = imported.unmodeled;
   return SwingupOutcome{std::move(result), std::move(s)};
 }
 
@@ -179,25 +122,22 @@ void write_json(const nlohmann::json& j, const std::string& path) {
   f.commit();
 }
 
-std::string human_summary(const nlohmann::json& s) {
+std::string human_summary(const RunSummary& s) {
   std::ostringstream o;
   o << std::setprecision(4);
-  o << "C/GMRES (" << (s["formulation"] == "fd" ? "FD" : "ID") << ", " << s["derivatives"].get<std::string>()
-    << ") on " << s["model"].get<std::string>() << ": n = " << s["n"] << ", N = " << s["N"]
-    << ", kmax = " << s["kmax"] << ", " << s["duration"].get<double>() << " s\n";
-  if (s["diverged"].get<bool>()) {
-    o << "  DIVERGED at t = " << s["diverged_at"].get<double>() << " s: "
-      << s["divergence_reason"].get<std::string>() << "\n";
+  o << s.label().substr(0, s.label().find(')') + 1) << " on " << s.task.model << ": n = " << s.n
+    << ", N = " << s.task.N << ", kmax = " << s.task.kmax << ", " << s.task.duration << " s\n";
+  if (s.diverged) {
+    o << "  DIVERGED at t = " << s.diverged_at << " s: " << s.divergence_reason << "\n";
   } else {
-    o << "  completed " << s["steps"] << " control steps without divergence\n";
+    o << "  completed " << s.steps << " control steps without divergence\n";
   }
-  o << "  update time [ms]: mean " << s["mean_update_ms"].get<double>() << ", p50 "
-    << s["p50_update_ms"].get<double>() << ", p95 " << s["p95_update_ms"].get<double>() << ", max "
-    << s["max_update_ms"].get<double>() << "  (" << s["evaluations_per_update"] << " F evaluations)\n";
-  o << "  phases [ms]: rollout " << s["phase_ms"]["rollout"].get<double>() << ", costate "
-    << s["phase_ms"]["costate"].get<double>() << ", gmres " << s["phase_ms"]["gmres"].get<double>() << "\n";
-  o << "  final max|q - qref| = " << s["final_q_error"].get<double>() << " rad, |v| = "
-    << s["final_v_norm"].get<double>() << ", mean residual " << s["mean_residual"].get<double>() << "\n";
+  o << "  update time [ms]: mean " << s.mean_update_ms << ", p50 " << s.p50_update_ms << ", p95 "
+    << s.p95_update_ms << ", max " << s.max_update_ms << "  (" << s.evaluations_per_update
+    << " F evaluations)\n";
+  o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
+  o << "  final max|q - qref| = " << s.final_q_error << " rad, |v| = " << s.final_v_norm
+    << ", mean residual " << s.mean_residual << "\n";
   return o.str();
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 /// @file swingup.hpp
-/// @brief The paper's swing-up experiment (DESIGN §7) as used by `swingup` and `sweep`.
+/// @brief One closed-loop run of a task (idmpc/experiment/task.hpp), as used by `swingup` and
+/// `sweep`: the task file gives the experiment, command-line options override it.
 
 #include <optional>
 #include <string>
@@ -9,47 +10,39 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "idmpc/experiment/run_record.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
 
 namespace idmpc::app {
 
-/// @brief Everything that defines one closed-loop run; the defaults are the paper's.
-struct SwingupOptions {
-  std::string model;
-  std::string formulation = "id";
-  std::string derivatives = "adjoint";
-  int N = 25;
-  int kmax = 10;
-  double Tf = 0.5;
-  double alpha = 1.0;
-  double dt = 1e-3;
-  double zeta = 0;  ///< 0 = 1/dt
-  double h = 1e-8;
-  double duration = 10.0;
-  std::vector<double> q0;    ///< empty: (−π, 0, …, 0)
-  std::vector<double> qref;  ///< empty: 0
-  std::vector<double> Qq{1.0}, Qv{0.1}, Qa{0.0}, R{1e-4};
-  bool direct_torque = false;
-  bool simd_stages = true;  ///< ID + adjoint: evaluate stages in SIMD lanes
+/// @brief Command-line options that override a task's fields; only those given are applied.
+struct TaskOverrides {
+  std::string task_file;  ///< --task; empty: the paper's swing-up
+  std::string model;      ///< positional MODEL
+  Task values;            ///< parsed values, applied where the option was given
+  std::vector<std::pair<CLI::Option*, void (*)(const Task&, Task&)>> given;
 };
 
-/// @brief Adds the swing-up options to a CLI sub-command.
-void add_swingup_options(CLI::App& sub, SwingupOptions& opt);
+/// @brief Adds --task, MODEL and the task options (--formulation, --N, --Qq, …) to a command.
+void add_task_options(CLI::App& sub, TaskOverrides& o);
+
+/// @brief The task file (or the paper's) with the given options applied.
+Task make_task(const TaskOverrides& o);
 
 /// @brief Outcome of one run with its summary (the JSON written by --summary).
 struct SwingupOutcome {
   mj::RunResult result;
-  nlohmann::json summary;
+  RunSummary summary;
 };
 
-/// @brief Runs the experiment; streams the CSV log to `log_path` if non-empty (temporary file
-/// renamed when the run ends, diverged or not). Throws on bad options before any output.
-SwingupOutcome run_swingup(const SwingupOptions& opt, const std::string& log_path);
+/// @brief Runs the task; streams the CSV log to `log_path` if non-empty (temporary file
+/// renamed when the run ends, diverged or not). Throws on bad settings before any output.
+SwingupOutcome run_swingup(const Task& task, const std::string& log_path);
 
 /// @brief Writes JSON to a file atomically.
 void write_json(const nlohmann::json& j, const std::string& path);
 
 /// @brief One-screen human summary of a run.
-std::string human_summary(const nlohmann::json& s);
+std::string human_summary(const RunSummary& s);
 
 }  // namespace idmpc::app

@@ -15,13 +15,13 @@ namespace idmpc::app {
 
 void register_swingup(CLI::App& app) {
   struct Options {
-    SwingupOptions run;
+    TaskOverrides run;
     std::string log, summary, video;
   };
   auto opt = std::make_shared<Options>();
-  CLI::App* sub = app.add_subcommand("swingup", "Closed-loop swing-up by C/GMRES (FD or ID) with MuJoCo in the loop");
-  sub->add_option("model", opt->run.model, "MJCF/URDF model file")->required();
-  add_swingup_options(*sub, opt->run);
+  CLI::App* sub = app.add_subcommand(
+      "swingup", "One closed-loop run of a task by C/GMRES (FD or ID) with MuJoCo in the loop");
+  add_task_options(*sub, opt->run);
   sub->add_option("--log", opt->log, "CSV log, one row per control step");
   sub->add_option("--summary", opt->summary, "JSON summary");
   sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)");
@@ -37,8 +37,9 @@ void register_swingup(CLI::App& app) {
     std::string log = opt->log;
     const bool temporary_log = log.empty() && !opt->video.empty();
     if (temporary_log) log = opt->video + ".log." + std::to_string(::getpid()) + ".csv";
-    SwingupOutcome out = run_swingup(opt->run, log);
-    if (!opt->summary.empty()) write_json(out.summary, opt->summary);
+    const Task task = make_task(opt->run);
+    SwingupOutcome out = run_swingup(task, log);
+    if (!opt->summary.empty()) write_json(to_json(out.summary), opt->summary);
     std::cout << human_summary(out.summary);
     if (!opt->log.empty()) std::cout << "  log: " << opt->log << "\n";
     if (!opt->summary.empty()) std::cout << "  summary: " << opt->summary << "\n";
@@ -50,13 +51,10 @@ void register_swingup(CLI::App& app) {
         ~Cleanup() { if (!path.empty()) std::remove(path.c_str()); }
       } cleanup{temporary_log ? log : ""};
       render::RunLog run = render::read_run_log(log);
-      const std::string f = out.summary["formulation"] == "fd" ? "FD" : "ID";
-      run.formulation = out.summary["formulation"].get<std::string>();
-      run.derivatives = out.summary["derivatives"].get<std::string>();
-      run.label = "C/GMRES (" + f + ", " + out.summary["derivatives"].get<std::string>() + ") N=" +
-                  std::to_string(out.summary["N"].get<int>()) + " kmax=" +
-                  std::to_string(out.summary["kmax"].get<int>());
-      render::render_video(opt->run.model, {run}, render::VideoOptions{}, opt->video, [](double frac) {
+      run.formulation = task.formulation;
+      run.derivatives = task.derivatives;
+      run.label = out.summary.label();
+      render::render_video(task.model, {run}, render::VideoOptions{}, opt->video, [](double frac) {
         std::fprintf(stderr, "\rrendering %3.0f%%", 100 * frac);
         if (frac >= 1) std::fprintf(stderr, "\n");
       });

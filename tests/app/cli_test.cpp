@@ -400,19 +400,21 @@ TEST_F(Cli, SwingupWritesLogAndSummary) {
 
   // the summary
   const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "summary.json"));
-  for (const char* key : {"model", "n", "formulation", "derivatives", "N", "kmax", "Qa", "duration",
-                          "diverged", "diverged_at", "mean_update_ms", "p50_update_ms", "p95_update_ms",
-                          "max_update_ms", "final_q_error", "final_v_norm", "mean_residual"}) {
+  for (const char* key : {"schema", "task", "n", "diverged", "diverged_at", "mean_update_ms", "p50_update_ms",
+                          "p95_update_ms", "max_update_ms", "final_q_error", "final_v_norm", "mean_residual"}) {
     EXPECT_TRUE(s.contains(key)) << "summary lacks '" << key << "'";
   }
-  EXPECT_EQ(s["model"], kArm4);
+  EXPECT_EQ(s["schema"], 1);
+  // the task as run: the paper's swing-up with the options given
+  const nlohmann::json& task = s["task"];
+  EXPECT_EQ(task["model"], kArm4);
   EXPECT_EQ(s["n"], 4);
-  EXPECT_EQ(s["formulation"], "id");
-  EXPECT_EQ(s["derivatives"], "adjoint");
-  EXPECT_EQ(s["N"], 25);
-  EXPECT_EQ(s["kmax"], 10);
-  EXPECT_EQ(s["Qa"], nlohmann::json(std::vector<double>(4, 0.0)));
-  EXPECT_DOUBLE_EQ(s["duration"].get<double>(), 0.2);
+  EXPECT_EQ(task["formulation"], "id");
+  EXPECT_EQ(task["derivatives"], "adjoint");
+  EXPECT_EQ(task["cgmres"]["N"], 25);
+  EXPECT_EQ(task["cgmres"]["kmax"], 10);
+  EXPECT_EQ(task["weights"]["Qa"], nlohmann::json(std::vector<double>{0.0}));
+  EXPECT_DOUBLE_EQ(task["duration"].get<double>(), 0.2);
   EXPECT_EQ(s["diverged"], false);
   EXPECT_TRUE(s["diverged_at"].is_null());
   for (const char* key : {"mean_update_ms", "p50_update_ms", "p95_update_ms", "max_update_ms"}) {

@@ -14,7 +14,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
-#include "idmpc/ocp/ocp.hpp"
+#include "idmpc/solver/single_shooting.hpp"
 #include "support/problems.hpp"
 
 namespace idmpc {
@@ -96,7 +96,7 @@ TEST_P(OcpGradient, ResidualIsTheScaledGradientOfTheDiscreteCost) {
     const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
     const VecX<double> U =
         formulation == Formulation::kInverseDynamics ? A : torques_of(p.model, data, A, q0, v0, T, N);
-    Ocp ocp(p.model, formulation, mode, w, q_ref, N);
+    SingleShooting ocp(p.model, formulation, mode, w, q_ref, N);
     VecX<double> F(N * n);
     ocp.residual(U, q0, v0, T, F);
 
@@ -149,8 +149,8 @@ TEST(OcpFormulations, IdResidualIsFdResidualThroughTheChainRuleWhenQaIsZero) {
         const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
         Data data(p.model);
         const VecX<double> U = torques_of(p.model, data, A, q0, v0, T, N);
-        Ocp fd(p.model, Formulation::kForwardDynamics, mode, w, q_ref, N);
-        Ocp id(p.model, Formulation::kInverseDynamics, mode, w, q_ref, N);
+        SingleShooting fd(p.model, Formulation::kForwardDynamics, mode, w, q_ref, N);
+        SingleShooting id(p.model, Formulation::kInverseDynamics, mode, w, q_ref, N);
         VecX<double> Ffd(N * n), Fid(N * n);
         fd.residual(U, q0, v0, T, Ffd);
         id.residual(A, q0, v0, T, Fid);

@@ -8,7 +8,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
-#include "idmpc/ocp/ocp.hpp"
+#include "idmpc/solver/single_shooting.hpp"
 #include "support/problems.hpp"
 #include "support/test_models.hpp"
 
@@ -42,9 +42,9 @@ TEST_P(OcpModes, MatrixAndAdjointGiveTheSameResidual) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     std::mt19937 rng(seed);
-    Ocp matrix(p.model, formulation, DerivativeMode::kMatrix, paper_weights(n, 1e-3),
+    SingleShooting matrix(p.model, formulation, DerivativeMode::kMatrix, paper_weights(n, 1e-3),
                VecX<double>::Zero(n), N);
-    Ocp adjoint(p.model, formulation, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
+    SingleShooting adjoint(p.model, formulation, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
                 VecX<double>::Zero(n), N);
     const VecX<double> U = random_vector(rng, N * n, 5.0), q0 = random_vector(rng, n, 2.0),
                        v0 = random_vector(rng, n, 1.0);
@@ -72,7 +72,7 @@ TEST(OcpFrechetProduct, ForwardDifferenceWithH1e8IsAccurate) {
       for (const DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
         if (name == "chain32" && f == Formulation::kForwardDynamics && d == DerivativeMode::kMatrix) continue;
         SCOPED_TRACE(name + " " + to_string(f) + " " + to_string(d));
-        Ocp ocp(p.model, f, d, paper_weights(n, 0.0), VecX<double>::Zero(n), N);
+        SingleShooting ocp(p.model, f, d, paper_weights(n, 0.0), VecX<double>::Zero(n), N);
         VecX<double> F0(N * n), Fp(N * n), Fm(N * n);
         ocp.residual(U, q0, v0, 0.1, F0);
         ocp.residual(U + kH * W, q0, v0, 0.1, Fp);
@@ -94,9 +94,9 @@ TEST(OcpStageBatching, SimdLanesGiveTheSameResidualAsStageByStage) {
     for (int N : {1, 7, 25}) {
       SCOPED_TRACE(path + " N=" + std::to_string(N));
       std::mt19937 rng(static_cast<unsigned>(N));
-      Ocp lanes(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
+      SingleShooting lanes(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
                 VecX<double>::Zero(n), N);
-      Ocp single(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
+      SingleShooting single(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
                  VecX<double>::Zero(n), N);
       single.set_stage_batching(false);
       ASSERT_TRUE(lanes.stage_batching());

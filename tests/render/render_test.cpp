@@ -228,6 +228,18 @@ class RenderTest : public ::testing::Test {
 
 // ------------------------------------------------------------------------------- run logs
 
+// a run summary as `idmpc swingup --summary` writes it
+std::string summary_json(const char* formulation, const char* derivatives, int N, int kmax) {
+  RunSummary s;
+  s.task = paper_task();
+  s.task.formulation = formulation;
+  s.task.derivatives = derivatives;
+  s.task.N = N;
+  s.task.kmax = kmax;
+  s.n = 4;
+  return to_json(s).dump();
+}
+
 TEST_F(RenderTest, ReadsLogAndLabelFromSummary) {
   const std::string csv = dir_.file("run.csv");
   write_log(csv, 4, 0.1);
@@ -241,8 +253,7 @@ TEST_F(RenderTest, ReadsLogAndLabelFromSummary) {
   EXPECT_EQ(plain.nearest_row(-1.0), 0u);
   EXPECT_EQ(plain.nearest_row(9.0), 100u);
 
-  std::ofstream(dir_.file("run.json"))
-      << R"({"formulation": "id", "derivatives": "adjoint", "N": 25, "kmax": 10})";
+  std::ofstream(dir_.file("run.json")) << summary_json("id", "adjoint", 25, 10);
   const RunLog labelled = read_run_log(csv);
   EXPECT_EQ(labelled.label, "C/GMRES (ID, adjoint) N=25 kmax=10");
   EXPECT_EQ(labelled.formulation, "id");
@@ -421,8 +432,8 @@ TEST_F(RenderTest, CompareVideoShowsBothRunsInTheirColours) {
   const std::string b = dir_.file("id.csv");
   write_log(a, 4, 0.5);
   write_log(b, 4, 0.5, 0.15);
-  std::ofstream(dir_.file("fd.json")) << R"({"formulation": "fd", "N": 10, "kmax": 5})";
-  std::ofstream(dir_.file("id.json")) << R"({"formulation": "id", "N": 10, "kmax": 5})";
+  std::ofstream(dir_.file("fd.json")) << summary_json("fd", "matrix", 10, 5);
+  std::ofstream(dir_.file("id.json")) << summary_json("id", "matrix", 10, 5);
   const std::string out = dir_.file("compare.mp4");
   // ID given first: the colours still follow the formulation (FD blue, ID orange); no overlay,
   // whose legend has the same colours

@@ -13,21 +13,23 @@
 #include <thread>
 #include <vector>
 
+#include "idmpc/experiment/task.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/mujoco/plant.hpp"
-#include "idmpc/ocp/ocp.hpp"
-#include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/controller.hpp"
 
 namespace idmpc {
 namespace {
 
 const std::string kArm4 = IDMPC_SOURCE_DIR "/mjcf/arm4.xml";
 constexpr int kN = 4;
-constexpr double kDuration = 10.0;
-constexpr double kDt = 1e-3;
-constexpr long kSteps = 10000;  // kDuration / kDt
+// the paper's task (mjcf/paper_swingup.json): 10 s at Δt = 1 ms
+const double kDuration = paper_task().duration;
+const double kDt = paper_task().dt;
+const long kSteps = std::lround(kDuration / kDt);
 
 // the success criterion: upright and at rest after 10 s
 constexpr double kFinalAngle = 0.05;    // rad, every |q_i − q_ref,i|
@@ -64,18 +66,17 @@ class Loop {
       : m_(mj::load_model(kArm4)), imported_(mj::import_model(m_.get(), kArm4)) {
     const Model& model = imported_.model;
     const int n = model.n;
-    const OcpWeights w{VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1),
-                       VecX<double>::Zero(n), VecX<double>::Constant(n, 1e-4)};
-    q_ref_ = VecX<double>::Zero(n);
-    ocp_ = std::make_unique<Ocp>(model, settings.formulation, settings.mode, w, q_ref_, settings.N);
-    CgmresSettings cs;  // T_f = 0.5, α = 1, Δt = 1 ms, h = 1e-8
+    // the paper's task (mjcf/paper_swingup.json) with this test's formulation and settings
+    const ResolvedTask paper = resolve(paper_task(), n);
+    q_ref_ = paper.qref;
+    CgmresSettings cs = paper.cgmres;
     cs.kmax = settings.kmax;
     cs.zeta = settings.zeta;
-    solver_ = std::make_unique<Cgmres>(*ocp_, cs);
+    controller_ = std::make_unique<Controller>(
+        OcpProblem(model, settings.formulation, settings.mode, paper.weights, q_ref_, settings.N), cs);
     plant_ = std::make_unique<mj::Plant>(m_.get(), imported_.actuation);
     ls_.duration = settings.duration;
-    ls_.q0 = VecX<double>::Zero(n);
-    ls_.q0[0] = -M_PI;
+    ls_.q0 = paper.q0;
     ls_.v0 = VecX<double>::Zero(n);
     ls_.phase_timing = false;  // tests never time anything
     run_.settings = settings;
@@ -87,7 +88,7 @@ class Loop {
   // runs the loop; an exception is kept in the result, never thrown across a thread
   void operator()() {
     try {
-      run_.result = mj::run_closed_loop(*plant_, *ocp_, *solver_, q_ref_, ls_, [&](const mj::StepRecord& r) {
+      run_.result = mj::run_closed_loop(*plant_, *controller_, ls_, [&](const mj::StepRecord& r) {
         ++run_.callbacks;
         run_.t.push_back(r.t);
         run_.q.push_back(r.q);
@@ -105,8 +106,7 @@ class Loop {
   mj::ModelPtr m_;
   mj::ImportedModel imported_;
   VecX<double> q_ref_;
-  std::unique_ptr<Ocp> ocp_;
-  std::unique_ptr<Cgmres> solver_;
+  std::unique_ptr<Controller> controller_;
   std::unique_ptr<mj::Plant> plant_;
   mj::ClosedLoopSettings ls_;
   LoopRun run_;

@@ -1,5 +1,6 @@
 #include "support/problems.hpp"
 
+#include "idmpc/experiment/task.hpp"
 #include "idmpc/mujoco/import.hpp"
 
 namespace idmpc::test {
@@ -11,8 +12,9 @@ Problem load_problem(const std::string& path) {
 }
 
 OcpWeights paper_weights(int n, double Qa) {
-  return {VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1),
-          VecX<double>::Constant(n, Qa), VecX<double>::Constant(n, 1e-4)};
+  OcpWeights w = resolve(paper_task(), n).weights;
+  w.Qa.setConstant(Qa);
+  return w;
 }
 
 VecX<double> random_vector(std::mt19937& rng, int n, double lo, double hi) {

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "idmpc/mujoco/load.hpp"
-#include "idmpc/ocp/ocp.hpp"
+#include "idmpc/ocp/problem.hpp"
 
 namespace idmpc::test {
 
@@ -20,7 +20,7 @@ struct Problem {
 /// @brief Loads and imports a model file (throws like the CLI would).
 Problem load_problem(const std::string& path);
 
-/// @brief The paper's weights (DESIGN §7): Q_q = 1, Q_v = 0.1, Q_a, R = 1e-4.
+/// @brief The paper's weights (mjcf/paper_swingup.json) with Q_a set to `Qa`.
 OcpWeights paper_weights(int n, double Qa = 0.0);
 
 /// @brief n values uniform in [lo, hi].

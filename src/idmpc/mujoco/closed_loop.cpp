@@ -22,10 +22,9 @@ double percentile(std::vector<double> x, double p) {
   return x[lo] + (pos - static_cast<double>(lo)) * (x[hi] - x[lo]);
 }
 
-RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<double>& q_ref,
-                          const ClosedLoopSettings& settings,
+RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,
                           const std::function<void(const StepRecord&)>& on_step) {
-  const int n = ocp.n();
+  const int n = controller.n();
   if (settings.q0.size() != n || settings.v0.size() != n) {
     throw std::invalid_argument("initial state must have " + std::to_string(n) + " entries, got " +
                                 std::to_string(settings.q0.size()));
@@ -33,20 +32,18 @@ RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<dou
   if (!(settings.duration > 0)) {
     throw std::invalid_argument("duration must be positive, got " + std::to_string(settings.duration));
   }
-  const double dt = solver.settings().dt;
+  const double dt = controller.dt();
   const long steps = std::lround(settings.duration / dt);
   plant.set_timestep(dt);
   plant.reset(settings.q0, settings.v0);
-  solver.enable_timing(settings.phase_timing);
+  controller.solver().enable_timing(settings.phase_timing);
 
   RunResult result;
   result.update_ms.reserve(static_cast<size_t>(steps));
-  VecX<double> q = plant.q(), v = plant.v(), tau = VecX<double>::Zero(n), tau_next = tau;
-  result.init_residual = solver.initialize(0.0, q, v);
-  // the torque of the solution at t = 0 is applied over the first step; afterwards the update
-  // made at t is applied at t_app = t + Δt (paper eqs. 27–28), as in C/GMRES's own loop
-  ocp.applied_torque(q, v, solver.solution(), solver.solution().head(n), 0.0, tau);
-  VecX<double> a0_applied = solver.solution().head(n);
+  VecX<double> q = plant.q(), v = plant.v();
+  // the torque applied over the current period; the controller's output applies over the next
+  VecX<double> tau = controller.initialize(q, v);
+  result.init_residual = controller.residual_norm();
   double residual_sum = 0;
   UpdateTimes phase_sum;
 
@@ -54,30 +51,24 @@ RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<dou
     const double t = static_cast<double>(k) * dt;
     q = plant.q();
     v = plant.v();
-    // one control update: C/GMRES for t + Δt, then the torque to apply then
+    // one control update at t: the torque for t + Δt
     const auto start = std::chrono::steady_clock::now();
-    const bool ok = solver.update(t, q, v);
-    ocp.applied_torque(q, v, solver.solution(), a0_applied, dt, tau_next);
+    const bool ok = controller.update(t, q, v);
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 
-    std::string reason;
-    if (!ok) {
-      reason = "C/GMRES solution or residual became non-finite or exceeded 1e8";
-    } else if (!tau_next.allFinite()) {
-      reason = "non-finite torque";
-    }
+    std::string reason = ok ? "" : controller.failure();
     // the row holds the measured state, the torque applied over [t, t + Δt) and this update
-    on_step(StepRecord{t, q, v, tau, solver.residual_norm(), ms});
+    on_step(StepRecord{t, q, v, tau, controller.residual_norm(), ms});
     result.steps = static_cast<int>(k + 1);
     if (reason.empty()) {
       result.update_ms.push_back(ms);
-      residual_sum += solver.residual_norm();
-      const UpdateTimes& ph = solver.last_times();
+      residual_sum += controller.residual_norm();
+      const UpdateTimes& ph = controller.solver().last_times();
       phase_sum.total += ph.total;
       phase_sum.rollout += ph.rollout;
       phase_sum.costate += ph.costate;
       phase_sum.gmres += ph.gmres;
-      result.evaluations_per_update = solver.evaluations();
+      result.evaluations_per_update = controller.solver().evaluations();
       if (!plant.step(tau, &reason)) {
         // the plant blew up under this torque: reason says how
       } else if (plant.v().cwiseAbs().maxCoeff() > kMaxSpeed) {
@@ -90,8 +81,7 @@ RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<dou
       result.divergence_reason = reason;
       break;
     }
-    tau.swap(tau_next);
-    a0_applied = solver.solution().head(n);
+    tau = controller.torque();
   }
 
   const double m = std::max<double>(1.0, static_cast<double>(result.update_ms.size()));
@@ -100,7 +90,7 @@ RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<dou
                                      1e3 * phase_sum.costate / m, 1e3 * phase_sum.gmres / m};
   result.final_q = plant.q();
   result.final_v = plant.v();
-  result.final_q_error = (result.final_q - q_ref).cwiseAbs().maxCoeff();
+  result.final_q_error = (result.final_q - controller.q_ref()).cwiseAbs().maxCoeff();
   result.final_v_norm = result.final_v.norm();
   return result;
 }

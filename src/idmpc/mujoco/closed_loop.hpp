@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "idmpc/mujoco/plant.hpp"
-#include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/controller.hpp"
 
 namespace idmpc::mj {
 
@@ -45,9 +45,9 @@ struct RunResult {
 };
 
 /// @brief Runs the closed loop from (q0, v0) for `duration`, calling on_step for each logged
-/// step. A divergence ends the run cleanly: it is recorded in the result, never thrown.
-RunResult run_closed_loop(Plant& plant, Ocp& ocp, Cgmres& solver, const VecX<double>& q_ref,
-                          const ClosedLoopSettings& settings,
+/// step: plant I/O only, the controller owns the timing of its torques (eqs. 27–28). A
+/// divergence ends the run cleanly: it is recorded in the result, never thrown.
+RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,
                           const std::function<void(const StepRecord&)>& on_step);
 
 /// @brief Median-style percentile (p in [0, 100]) of a sample, NaN when empty.

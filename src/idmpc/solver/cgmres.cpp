@@ -7,6 +7,8 @@
 
 #include <Eigen/LU>
 
+#include "idmpc/dynamics/finite_difference.hpp"
+
 namespace idmpc {
 namespace {
 
@@ -40,7 +42,7 @@ void CgmresSettings::validate() const {
   require(alpha >= 0 && std::isfinite(alpha), "horizon growth alpha must be non-negative", alpha);
 }
 
-Cgmres::Cgmres(Ocp& ocp, const CgmresSettings& settings)
+Cgmres::Cgmres(SingleShooting& ocp, const CgmresSettings& settings)
     : ocp_(ocp),
       settings_(validated(settings)),
       horizon_(settings.Tf, settings.alpha),
@@ -55,26 +57,21 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
                           const Eigen::Ref<const VecX<double>>& v) {
   const int n = ocp_.n();
   const double T = horizon_.length(t);
-  VecX<double> u = VecX<double>::Zero(n), F0(n), Fp(n), Fm(n), up(n);
-  MatX<double> J(n, n);
-  auto F_of = [&](const VecX<double>& x, VecX<double>& out) { ocp_.residual(x, q, v, T, out, 1); };
+  VecX<double> u = VecX<double>::Zero(n), F0(n);
+  // F_0 of the one-stage problem (every stage sees x)
+  auto F_of = [&](const VecX<double>& x) {
+    VecX<double> out(n);
+    ocp_.residual(x, q, v, T, out, 1);
+    return out;
+  };
   double norm = 0;
-  // Newton on the one-stage problem, Jacobian by central differences
+  // Newton, Jacobian by the library's central differences
   for (int it = 0; it <= settings_.init_iterations; ++it) {
-    F_of(u, F0);
+    F0 = F_of(u);
     norm = F0.norm();
     if (!std::isfinite(norm)) throw std::runtime_error("zero-horizon initialization: non-finite residual");
     if (norm <= settings_.init_tolerance || it == settings_.init_iterations) break;
-    for (int j = 0; j < n; ++j) {
-      const double hj = 1e-6 * std::max(1.0, std::abs(u[j]));
-      up = u;
-      up[j] += hj;
-      F_of(up, Fp);
-      up[j] = u[j] - hj;
-      F_of(up, Fm);
-      J.col(j) = (Fp - Fm) / (2 * hj);
-    }
-    u -= J.partialPivLu().solve(F0);
+    u -= central_difference_jacobian(F_of, u).partialPivLu().solve(F0);
   }
   for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * n, n) = u;
   Udot_.setZero();

@@ -1,14 +1,15 @@
 #pragma once
 /// @file cgmres.hpp
-/// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6), one solver for every Ocp:
+/// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6), one solver for every problem
+/// (single shooting):
 /// Ḟ = −ζF is tracked by solving (∂F/∂U) U̇ = −ζF − (∂F/∂x)ẋ − ∂F/∂t with matrix-free
 /// forward-difference products and kmax GMRES iterations, then U ← U + Δt U̇.
 
 #include <string>
 
-#include "idmpc/ocp/ocp.hpp"
 #include "idmpc/solver/gmres.hpp"
 #include "idmpc/solver/horizon.hpp"
+#include "idmpc/solver/single_shooting.hpp"
 
 namespace idmpc {
 
@@ -36,7 +37,7 @@ struct UpdateTimes {
 
 class Cgmres {
  public:
-  Cgmres(Ocp& ocp, const CgmresSettings& settings);
+  Cgmres(SingleShooting& ocp, const CgmresSettings& settings);
 
   /// @brief Zero-horizon initialization at time t: Newton on the one-stage problem F_0 = 0
   /// (every stage sees x), copied to all stages. Returns ‖F_0‖ reached.
@@ -59,11 +60,11 @@ class Cgmres {
   const UpdateTimes& last_times() const { return times_; }
   void enable_timing(bool on) { timing_ = on; ocp_.enable_timing(on); }
   const CgmresSettings& settings() const { return settings_; }
-  const Ocp& ocp() const { return ocp_; }
+  const SingleShooting& ocp() const { return ocp_; }
   double horizon(double t) const { return horizon_.length(t); }
 
  private:
-  Ocp& ocp_;
+  SingleShooting& ocp_;
   CgmresSettings settings_;
   Horizon horizon_;
   Gmres gmres_;

@@ -1,0 +1,297 @@
+#include "idmpc/experiment/run_record.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+namespace idmpc {
+namespace {
+
+constexpr const char* kHeaderShape = "t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms";
+
+std::string trim(const std::string& s) {
+  std::size_t b = 0;
+  std::size_t e = s.size();
+  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
+  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
+  return s.substr(b, e - b);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string cell;
+  while (std::getline(ss, cell, ',')) out.push_back(trim(cell));
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+// counts consecutive columns prefix0, prefix1, ... starting at `at`
+int count_indexed(const std::vector<std::string>& cols, std::size_t at, const std::string& prefix) {
+  int k = 0;
+  while (at + static_cast<std::size_t>(k) < cols.size() &&
+         cols[at + static_cast<std::size_t>(k)] == prefix + std::to_string(k)) {
+    ++k;
+  }
+  return k;
+}
+
+// the column layout of a header: n joint columns per q and v, nu torque columns
+struct Layout {
+  int n = 0;
+  int nu = 0;
+};
+
+bool parse_header(const std::vector<std::string>& cols, Layout& layout) {
+  if (cols.empty() || cols[0] != "t") return false;
+  std::size_t at = 1;
+  layout.n = count_indexed(cols, at, "q");
+  if (layout.n < 1) return false;
+  at += static_cast<std::size_t>(layout.n);
+  if (count_indexed(cols, at, "v") != layout.n) return false;
+  at += static_cast<std::size_t>(layout.n);
+  layout.nu = count_indexed(cols, at, "u");
+  if (layout.nu < 1) return false;
+  at += static_cast<std::size_t>(layout.nu);
+  return cols.size() == at + 2 && cols[at] == "residual" && cols[at + 1] == "update_ms";
+}
+
+bool parse_number(const std::string& text, double& value) {
+  if (text.empty()) return false;
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  value = std::strtod(begin, &end);
+  // nan, inf and overflow to +-inf are kept: a diverged run logs them
+  return end == begin + text.size();
+}
+
+// fills formulation, derivatives and label from `<log>.json` when it exists
+void read_sibling_summary(RunLog& log) {
+  namespace fs = std::filesystem;
+  const fs::path json_path = fs::path(log.path).replace_extension(".json");
+  log.label = fs::path(log.path).stem().string();
+  std::error_code ec;
+  if (!fs::is_regular_file(json_path, ec)) return;
+  const RunSummary s = read_summary(json_path.string());
+  log.formulation = s.task.formulation;
+  log.derivatives = s.task.derivatives;
+  log.label = s.label();
+}
+
+}  // namespace
+
+double RunLog::u_norm(std::size_t i) const {
+  const double* row = u_row(i);
+  double s = 0;
+  for (int k = 0; k < nu; ++k) s += row[k] * row[k];
+  return std::sqrt(s);
+}
+
+std::size_t RunLog::nearest_row(double time) const {
+  const auto it = std::lower_bound(t.begin(), t.end(), time);
+  if (it == t.begin()) return 0;
+  if (it == t.end()) return t.size() - 1;
+  const auto i = static_cast<std::size_t>(it - t.begin());
+  return (time - t[i - 1] <= t[i] - time) ? i - 1 : i;
+}
+
+bool RunLog::finite_pose(std::size_t i) const {
+  const double* row = q_row(i);
+  return std::all_of(row, row + n, [](double x) { return std::isfinite(x); });
+}
+
+RunLog read_run_log(const std::string& csv_path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(csv_path, ec)) {
+    throw std::runtime_error("run log '" + csv_path + "' does not exist");
+  }
+  if (fs::is_directory(csv_path, ec)) {
+    throw std::runtime_error("run log '" + csv_path + "': expected a CSV file, got a directory");
+  }
+  std::ifstream in(csv_path);
+  if (!in) throw std::runtime_error("cannot open run log '" + csv_path + "'");
+
+  RunLog log;
+  log.path = csv_path;
+  const std::string where = "run log '" + csv_path + "'";
+
+  // header
+  std::string line;
+  if (!std::getline(in, line)) {
+    throw std::runtime_error(where + " is empty: expected a header " + kHeaderShape);
+  }
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  const std::vector<std::string> header = split(line);
+  Layout layout;
+  if (!parse_header(header, layout)) {
+    const std::string shown = line.size() > 200 ? line.substr(0, 200) + "..." : line;
+    throw std::runtime_error(where + " line 1: bad header: expected " + kHeaderShape +
+                             ", got '" + shown + "'");
+  }
+  log.n = layout.n;
+  log.nu = layout.nu;
+
+  // rows: t | q | v | u | residual | update_ms
+  const std::size_t columns = header.size();
+  const std::size_t q_at = 1;
+  const std::size_t u_at = q_at + 2 * static_cast<std::size_t>(log.n);
+  std::vector<double> values(columns);
+  int line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (trim(line).empty()) continue;
+    const std::vector<std::string> cells = split(line);
+    if (cells.size() != columns) {
+      throw std::runtime_error(where + " line " + std::to_string(line_no) + ": expected " +
+                               std::to_string(columns) + " columns, got " +
+                               std::to_string(cells.size()));
+    }
+    for (std::size_t c = 0; c < columns; ++c) {
+      if (!parse_number(cells[c], values[c])) {
+        throw std::runtime_error(where + " line " + std::to_string(line_no) + ", column '" +
+                                 header[c] + "': expected a number, got '" + cells[c] + "'");
+      }
+    }
+    const double time = values[0];
+    if (!std::isfinite(time)) {
+      throw std::runtime_error(where + " line " + std::to_string(line_no) +
+                               ": expected a finite time, got '" + cells[0] + "'");
+    }
+    if (!log.t.empty() && time < log.t.back()) {
+      throw std::runtime_error(where + " line " + std::to_string(line_no) +
+                               ": expected non-decreasing times, got " + cells[0] +
+                               " after " + std::to_string(log.t.back()));
+    }
+    log.t.push_back(time);
+    log.q.insert(log.q.end(), values.begin() + q_at, values.begin() + q_at + log.n);
+    log.u.insert(log.u.end(), values.begin() + u_at, values.begin() + u_at + log.nu);
+    log.residual.push_back(values[columns - 2]);
+    log.update_ms.push_back(values[columns - 1]);
+  }
+  if (log.t.empty()) {
+    throw std::runtime_error(where + " has a header but no rows: expected at least one row");
+  }
+  read_sibling_summary(log);
+  return log;
+}
+
+RunLogWriter::RunLogWriter(std::ostream& out, int n) : out_(out), n_(n) {
+  out_ << "t";
+  for (const char* p : {"q", "v", "u"}) {
+    for (int i = 0; i < n_; ++i) out_ << ',' << p << i;
+  }
+  out_ << ",residual,update_ms\n" << std::setprecision(10);
+}
+
+void RunLogWriter::row(double t, const VecX<double>& q, const VecX<double>& v, const VecX<double>& u,
+                       double residual, double update_ms) {
+  out_ << t;
+  for (const VecX<double>* x : {&q, &v, &u}) {
+    for (int i = 0; i < n_; ++i) out_ << ',' << (*x)[i];
+  }
+  out_ << ',' << residual << ',' << update_ms << '\n';
+}
+
+std::string RunSummary::label() const {
+  std::string upper = task.formulation;
+  std::transform(upper.begin(), upper.end(), upper.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return "C/GMRES (" + upper + ", " + task.derivatives + ") N=" + std::to_string(task.N) +
+         " kmax=" + std::to_string(task.kmax);
+}
+
+nlohmann::json to_json(const RunSummary& s) {
+  nlohmann::json j;
+  j["schema"] = s.schema;
+  j["task"] = to_json(s.task);
+  j["n"] = s.n;
+  j["simd_stages"] = s.simd_stages;
+  j["zeta"] = s.zeta;
+  j["steps"] = s.steps;
+  j["diverged"] = s.diverged;
+  j["diverged_at"] = s.diverged ? nlohmann::json(s.diverged_at) : nlohmann::json(nullptr);
+  j["divergence_reason"] = s.divergence_reason;
+  j["mean_update_ms"] = s.mean_update_ms;
+  j["p50_update_ms"] = s.p50_update_ms;
+  j["p95_update_ms"] = s.p95_update_ms;
+  j["max_update_ms"] = s.max_update_ms;
+  j["phase_ms"] = {{"rollout", s.rollout_ms}, {"costate", s.costate_ms}, {"gmres", s.gmres_ms}};
+  j["evaluations_per_update"] = s.evaluations_per_update;
+  j["init_residual"] = s.init_residual;
+  j["final_q_error"] = s.final_q_error;
+  j["final_v_norm"] = s.final_v_norm;
+  j["mean_residual"] = s.mean_residual;
+  j["unmodeled"] = s.unmodeled;
+  return j;
+}
+
+RunSummary summary_from_json(const nlohmann::json& j, const std::string& source) {
+  const std::string where = "run summary '" + source + "'";
+  if (!j.is_object() || !j.contains("schema") || !j.at("schema").is_number_integer()) {
+    throw std::runtime_error(where + ": expected an idmpc run summary with a 'schema' field");
+  }
+  if (j.at("schema").get<int>() != kRunRecordSchema) {
+    throw std::runtime_error(where + ": schema " + j.at("schema").dump() + ", this idmpc reads schema " +
+                             std::to_string(kRunRecordSchema));
+  }
+  RunSummary s;
+  try {
+    try {
+      s.task = task_from_json(j.at("task"), where + ", 'task'", Task{});
+    } catch (const std::invalid_argument& e) {
+      throw std::runtime_error(e.what());
+    }
+    s.n = j.at("n").get<int>();
+    s.simd_stages = j.at("simd_stages").get<bool>();
+    s.zeta = j.at("zeta").get<double>();
+    s.steps = j.at("steps").get<int>();
+    s.diverged = j.at("diverged").get<bool>();
+    if (s.diverged) s.diverged_at = j.at("diverged_at").get<double>();
+    s.divergence_reason = j.at("divergence_reason").get<std::string>();
+    s.mean_update_ms = j.at("mean_update_ms").get<double>();
+    // percentiles of an empty sample are NaN, written as null
+    auto number = [&](const char* key) {
+      return j.at(key).is_null() ? std::numeric_limits<double>::quiet_NaN() : j.at(key).get<double>();
+    };
+    s.p50_update_ms = number("p50_update_ms");
+    s.p95_update_ms = number("p95_update_ms");
+    s.max_update_ms = number("max_update_ms");
+    s.rollout_ms = j.at("phase_ms").at("rollout").get<double>();
+    s.costate_ms = j.at("phase_ms").at("costate").get<double>();
+    s.gmres_ms = j.at("phase_ms").at("gmres").get<double>();
+    s.evaluations_per_update = j.at("evaluations_per_update").get<int>();
+    s.init_residual = j.at("init_residual").get<double>();
+    s.final_q_error = j.at("final_q_error").get<double>();
+    s.final_v_norm = j.at("final_v_norm").get<double>();
+    s.mean_residual = j.at("mean_residual").get<double>();
+    s.unmodeled = j.at("unmodeled").get<std::vector<std::string>>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(where + ": missing or mistyped field (" + e.what() + ")");
+  }
+  return s;
+}
+
+RunSummary read_summary(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot open run summary '" + path + "'");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error("run summary '" + path + "': expected JSON, got a parse error: " + e.what());
+  }
+  return summary_from_json(j, path);
+}
+
+}  // namespace idmpc

@@ -1,0 +1,101 @@
+#pragma once
+/// @file run_record.hpp
+/// @brief The record of one closed-loop run, with one writer and one reader for each part
+/// (schema in docs/run_record.md):
+///   - the per-step log (CSV): `t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms`, one row
+///     per control step: measured state, torque applied over [t, t + Δt), ‖F‖ at the start of
+///     the update, the update's wall time;
+///   - the summary (JSON): schema version, the task as run, outcome and timing.
+
+#include <cstddef>
+#include <iosfwd>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "idmpc/experiment/task.hpp"
+
+namespace idmpc {
+
+inline constexpr int kRunRecordSchema = 1;
+
+/// @brief Writes the per-step log: header at construction, then one row per call.
+class RunLogWriter {
+ public:
+  RunLogWriter(std::ostream& out, int n);
+  void row(double t, const VecX<double>& q, const VecX<double>& v, const VecX<double>& u,
+           double residual, double update_ms);
+
+ private:
+  std::ostream& out_;
+  int n_;
+};
+
+/// @brief Outcome and timing of a run (the JSON summary), with the task it ran.
+struct RunSummary {
+  int schema = kRunRecordSchema;
+  Task task;                ///< settings as run (model path, weights, solver, formulation…)
+  int n = 0;
+  bool simd_stages = false;  ///< whether stages actually ran in SIMD lanes
+  double zeta = 0;           ///< ζ actually used (1/Δt when the task says 0)
+  int steps = 0;
+  bool diverged = false;
+  double diverged_at = std::numeric_limits<double>::quiet_NaN();
+  std::string divergence_reason;
+  double mean_update_ms = 0, p50_update_ms = 0, p95_update_ms = 0, max_update_ms = 0;
+  double rollout_ms = 0, costate_ms = 0, gmres_ms = 0;  ///< mean per update
+  int evaluations_per_update = 0;
+  double init_residual = 0, final_q_error = 0, final_v_norm = 0, mean_residual = 0;
+  std::vector<std::string> unmodeled;
+
+  /// @brief "C/GMRES (ID, adjoint) N=25 kmax=10"
+  std::string label() const;
+};
+
+nlohmann::json to_json(const RunSummary& s);
+/// @brief Throws std::runtime_error naming `source` for a summary of another schema version or
+/// with a missing or mistyped field.
+RunSummary summary_from_json(const nlohmann::json& j, const std::string& source);
+/// @brief Reads a summary file.
+RunSummary read_summary(const std::string& path);
+
+/// @brief One closed-loop run: per control step the time, the plant's q, the applied torque u,
+/// the optimality residual and the controller's update time.
+///
+/// CSV header: `t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms`; v is checked but not
+/// kept. Values may be nan/inf (a diverged run); the renderer holds the last finite pose.
+struct RunLog {
+  std::string path;   ///< the CSV file it was read from
+  std::string label;  ///< e.g. "C/GMRES (ID, adjoint) N=25 kmax=10", or the file's stem
+  std::string formulation;  ///< "fd" / "id" from the JSON summary, or ""
+  std::string derivatives;  ///< "matrix" / "adjoint" / ... from the JSON summary, or ""
+  int n = 0;          ///< joints (columns q0..q{n-1})
+  int nu = 0;         ///< torque columns u0..u{nu-1} (n for the fully actuated arms)
+  std::vector<double> t;          ///< rows
+  std::vector<double> q;          ///< rows x n, row-major
+  std::vector<double> u;          ///< rows x nu, row-major
+  std::vector<double> residual;   ///< rows
+  std::vector<double> update_ms;  ///< rows
+
+  std::size_t rows() const { return t.size(); }
+  const double* q_row(std::size_t i) const { return q.data() + i * static_cast<std::size_t>(n); }
+  const double* u_row(std::size_t i) const { return u.data() + i * static_cast<std::size_t>(nu); }
+  /// @brief Euclidean norm of u in row i.
+  double u_norm(std::size_t i) const;
+  /// @brief Index of the row whose time is nearest to `time` (rows() must be > 0).
+  std::size_t nearest_row(double time) const;
+  /// @brief Whether q of row i is finite.
+  bool finite_pose(std::size_t i) const;
+  double duration() const { return t.empty() ? 0.0 : t.back() - t.front(); }
+};
+
+/// @brief Reads a run log CSV and, when `<same path>.json` exists beside it, its summary for
+/// the label. Throws std::runtime_error naming
+/// the file (and the line number) for a missing or unreadable file, a bad header, a row with
+/// the wrong number of columns, a non-numeric value, non-increasing times, no rows at all, or a
+/// malformed JSON summary.
+RunLog read_run_log(const std::string& csv_path);
+
+}  // namespace idmpc

@@ -1,0 +1,267 @@
+#include "idmpc/experiment/task.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace idmpc {
+namespace {
+
+using nlohmann::json;
+
+json parse_file(const std::string& path, const char* what) {
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument(std::string(what) + " '" + path + "' cannot be read (missing or not readable)");
+  try {
+    return json::parse(in);
+  } catch (const json::exception& e) {
+    throw std::invalid_argument(std::string(what) + " '" + path + "': expected JSON, got a parse error: " + e.what());
+  }
+}
+
+// typed access naming file and field
+struct Reader {
+  const json& j;
+  std::string where;
+
+  void known(const std::set<std::string>& keys) const {
+    for (const auto& item : j.items()) {
+      if (!keys.count(item.key())) throw std::invalid_argument(where + ": unknown field '" + item.key() + "'");
+    }
+  }
+  bool has(const char* key) const { return j.contains(key); }
+  [[noreturn]] void bad(const char* key, const char* expected) const {
+    throw std::invalid_argument(where + ": field '" + key + "': expected " + expected + ", got " + j.at(key).dump());
+  }
+  void get(const char* key, double& x) const {
+    if (!has(key)) return;
+    if (!j.at(key).is_number()) bad(key, "a number");
+    x = j.at(key).get<double>();
+  }
+  void get(const char* key, int& x) const {
+    if (!has(key)) return;
+    if (!j.at(key).is_number_integer()) bad(key, "an integer");
+    x = j.at(key).get<int>();
+  }
+  void get(const char* key, bool& x) const {
+    if (!has(key)) return;
+    if (!j.at(key).is_boolean()) bad(key, "true or false");
+    x = j.at(key).get<bool>();
+  }
+  void get(const char* key, std::string& x) const {
+    if (!has(key)) return;
+    if (!j.at(key).is_string()) bad(key, "a string");
+    x = j.at(key).get<std::string>();
+  }
+  // a scalar or a list of numbers
+  void get(const char* key, std::vector<double>& x) const {
+    if (!has(key)) return;
+    const json& v = j.at(key);
+    if (v.is_number()) {
+      x = {v.get<double>()};
+      return;
+    }
+    if (!v.is_array() || v.empty()) bad(key, "a number or a list of numbers");
+    std::vector<double> out;
+    for (const json& e : v) {
+      if (!e.is_number()) bad(key, "a number or a list of numbers");
+      out.push_back(e.get<double>());
+    }
+    x = out;
+  }
+  Reader sub(const char* key) const {
+    if (!j.at(key).is_object()) bad(key, "an object");
+    return Reader{j.at(key), where + ", '" + key + "'"};
+  }
+};
+
+// a scalar broadcast to every joint, or exactly one value per joint
+VecX<double> per_joint(const std::vector<double>& values, int n, const std::string& name) {
+  if (values.size() == 1) return VecX<double>::Constant(n, values[0]);
+  if (static_cast<int>(values.size()) == n) return Eigen::Map<const VecX<double>>(values.data(), n);
+  throw std::invalid_argument(name + " has " + std::to_string(values.size()) + " values, expected 1 or " +
+                              std::to_string(n) + " (one per joint)");
+}
+
+VecX<double> finite(VecX<double> x, const std::string& name) {
+  for (int i = 0; i < x.size(); ++i) {
+    if (!std::isfinite(x[i])) throw std::invalid_argument(name + " must be finite, got " + std::to_string(x[i]));
+  }
+  return x;
+}
+
+VecX<double> non_negative(VecX<double> x, const std::string& name) {
+  for (int i = 0; i < x.size(); ++i) {
+    if (!(x[i] >= 0) || !std::isfinite(x[i])) {
+      throw std::invalid_argument(name + " must be finite and non-negative, got " + std::to_string(x[i]));
+    }
+  }
+  return x;
+}
+
+std::string resolve_path(const std::string& file, const std::string& relative_to) {
+  namespace fs = std::filesystem;
+  const fs::path p(file);
+  if (p.is_absolute()) return file;
+  return (fs::path(relative_to).parent_path() / p).lexically_normal().string();
+}
+
+}  // namespace
+
+std::string paper_task_path() { return IDMPC_SOURCE_DIR "/mjcf/paper_swingup.json"; }
+std::string paper_tables_path() { return IDMPC_SOURCE_DIR "/mjcf/paper_tables.json"; }
+
+Task load_task(const std::string& path, const Task* base) {
+  Task t = task_from_json(parse_file(path, "task file"), "task file '" + path + "'", base ? *base : paper_task());
+  t.source = path;
+  if (!t.model.empty()) t.model = resolve_path(t.model, path);
+  return t;
+}
+
+Task task_from_json(const nlohmann::json& j, const std::string& where, const Task& base) {
+  Task t = base;
+  const Reader r{j, where};
+  if (!j.is_object()) throw std::invalid_argument(r.where + ": expected a JSON object");
+  r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
+           "simd_stages", "direct_torque", "weights", "cgmres"});
+  if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
+  r.get("description", t.description);
+  r.get("model", t.model);
+  if (r.has("q0")) {
+    if (j.at("q0").is_string()) {
+      r.get("q0", t.q0_rule);
+      if (t.q0_rule != "swingup") r.bad("q0", "a list of joint positions or \"swingup\"");
+      t.q0.clear();
+    } else {
+      r.get("q0", t.q0);
+      t.q0_rule.clear();
+    }
+  }
+  r.get("qref", t.qref);
+  r.get("duration", t.duration);
+  r.get("formulation", t.formulation);
+  r.get("derivatives", t.derivatives);
+  r.get("simd_stages", t.simd_stages);
+  r.get("direct_torque", t.direct_torque);
+  if (r.has("weights")) {
+    const Reader w = r.sub("weights");
+    w.known({"Qq", "Qv", "Qa", "R", "Qa_fallback"});
+    w.get("Qq", t.Qq);
+    w.get("Qv", t.Qv);
+    w.get("Qa", t.Qa);
+    w.get("R", t.R);
+    w.get("Qa_fallback", t.Qa_fallback);
+  }
+  if (r.has("cgmres")) {
+    const Reader c = r.sub("cgmres");
+    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h"});
+    c.get("N", t.N);
+    c.get("kmax", t.kmax);
+    c.get("Tf", t.Tf);
+    c.get("alpha", t.alpha);
+    c.get("dt", t.dt);
+    c.get("zeta", t.zeta);
+    c.get("h", t.h);
+  }
+  return t;
+}
+
+const Task& paper_task() {
+  // the base of every other task: it must name every field itself
+  static const Task task = [] {
+    Task empty;
+    return load_task(paper_task_path(), &empty);
+  }();
+  return task;
+}
+
+nlohmann::json to_json(const Task& t) {
+  json j;
+  j["schema"] = kTaskSchema;
+  if (!t.description.empty()) j["description"] = t.description;
+  j["model"] = t.model;
+  j["q0"] = t.q0_rule.empty() ? json(t.q0) : json(t.q0_rule);
+  j["qref"] = t.qref;
+  j["duration"] = t.duration;
+  j["formulation"] = t.formulation;
+  j["derivatives"] = t.derivatives;
+  j["simd_stages"] = t.simd_stages;
+  j["direct_torque"] = t.direct_torque;
+  j["weights"] = {{"Qq", t.Qq}, {"Qv", t.Qv}, {"Qa", t.Qa}, {"R", t.R}, {"Qa_fallback", t.Qa_fallback}};
+  j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
+                 {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}};
+  return j;
+}
+
+ResolvedTask resolve(const Task& t, int n) {
+  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}};
+  if (t.N < 1) throw std::invalid_argument("N must be at least 1, got " + std::to_string(t.N));
+  if (!(t.duration > 0) || !std::isfinite(t.duration)) {
+    throw std::invalid_argument("duration must be positive, got " + std::to_string(t.duration));
+  }
+  // named as the option and as the task field
+  auto weight = [&](const std::vector<double>& x, const char* name) {
+    const std::string both = std::string("--") + name + " (weights." + name + ")";
+    return non_negative(per_joint(x, n, both), both);
+  };
+  r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa, "Qa"), weight(t.R, "R")};
+  r.qref = finite(t.qref.empty() ? VecX<double>::Zero(n) : per_joint(t.qref, n, "--qref (qref)"), "--qref (qref)");
+  if (t.q0_rule == "swingup") {
+    r.q0 = VecX<double>::Zero(n);
+    r.q0[0] = -M_PI;
+  } else {
+    if (static_cast<int>(t.q0.size()) != n) {
+      throw std::invalid_argument("--q0 (q0) has " + std::to_string(t.q0.size()) + " values, expected " +
+                                  std::to_string(n) + " (one per joint)");
+    }
+    r.q0 = finite(Eigen::Map<const VecX<double>>(t.q0.data(), n), "--q0 (q0)");
+  }
+  r.cgmres.kmax = t.kmax;
+  r.cgmres.Tf = t.Tf;
+  r.cgmres.alpha = t.alpha;
+  r.cgmres.dt = t.dt;
+  r.cgmres.zeta = t.zeta;
+  r.cgmres.h = t.h;
+  r.cgmres.validate();
+  return r;
+}
+
+const PaperCell* PaperTables::find(const std::string& table, const std::string& formulation, int n, int N,
+                                   int kmax) const {
+  for (const PaperCell& c : cells) {
+    if (c.table == table && c.formulation == formulation && c.n == n && c.N == N && c.kmax == kmax) return &c;
+  }
+  return nullptr;
+}
+
+PaperTables load_paper_tables(const std::string& path) {
+  const json j = parse_file(path, "tables file");
+  const Reader r{j, "tables file '" + path + "'"};
+  r.known({"schema", "source", "machine", "task", "marks", "cells"});
+  PaperTables t;
+  r.get("source", t.source);
+  r.get("machine", t.machine);
+  r.get("task", t.task);
+  t.task = resolve_path(t.task, path);
+  if (!j.contains("cells") || !j.at("cells").is_array()) r.bad("cells", "a list of cells");
+  for (const json& c : j.at("cells")) {
+    const Reader cr{c, r.where + ", a cell"};
+    cr.known({"table", "model", "n", "formulation", "N", "kmax", "ms", "mark"});
+    PaperCell cell;
+    cr.get("table", cell.table);
+    cr.get("model", cell.model);
+    cr.get("n", cell.n);
+    cr.get("formulation", cell.formulation);
+    cr.get("N", cell.N);
+    cr.get("kmax", cell.kmax);
+    cr.get("ms", cell.ms);
+    cr.get("mark", cell.mark);
+    t.cells.push_back(cell);
+  }
+  return t;
+}
+
+}  // namespace idmpc

@@ -1,0 +1,98 @@
+#pragma once
+/// @file task.hpp
+/// @brief Experiments are data: a task file (JSON) says which model to run, from where to where,
+/// for how long, with which weights, C/GMRES settings, formulation and derivative mode. The
+/// paper's swing-up is mjcf/paper_swingup.json and its tables mjcf/paper_tables.json; every
+/// command, test, benchmark and script reads those files, so the paper's setup exists once.
+///
+/// Task file fields (all optional in a user's file: missing ones come from the base task, the
+/// paper's swing-up; unknown fields are an error):
+///   "model"        path of the MJCF/URDF file, relative to the task file's directory
+///   "q0"           initial joint positions, one per joint, or "swingup" = (−π, 0, …, 0)
+///   "qref"         target joint positions: a scalar or one per joint
+///   "duration"     simulated seconds
+///   "formulation"  "fd" or "id";  "derivatives": "matrix" or "adjoint"
+///   "simd_stages"  ID + adjoint: evaluate horizon stages in SIMD lanes (bool)
+///   "direct_torque" apply joint torques through qfrc_applied instead of the actuators (bool)
+///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars or one per joint; "Qa_fallback": the Q_a
+///                  an ID run that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
+///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h"}
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "idmpc/ocp/problem.hpp"
+#include "idmpc/solver/cgmres.hpp"
+
+namespace idmpc {
+
+inline constexpr const char* kTaskSchema = "idmpc-task/1";
+
+struct Task {
+  std::string source;  ///< the task file it was read from, for messages
+  std::string description;
+  std::string model;   ///< model path, resolved against the task file's directory
+  std::string q0_rule;             ///< "swingup" or "" (then q0 holds the values)
+  std::vector<double> q0;
+  std::vector<double> qref;
+  double duration = 0;
+  std::string formulation, derivatives;
+  bool simd_stages = true;
+  bool direct_torque = false;
+  std::vector<double> Qq, Qv, Qa, R;
+  double Qa_fallback = 0;
+  int N = 0, kmax = 0;
+  double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
+};
+
+/// @brief The paper's swing-up task file shipped with the sources (mjcf/paper_swingup.json).
+std::string paper_task_path();
+/// @brief The paper's tables file (mjcf/paper_tables.json).
+std::string paper_tables_path();
+
+/// @brief Reads a task file; fields it lacks come from `base` (the paper's task if null).
+/// Throws std::invalid_argument naming the file and field for a bad file.
+Task load_task(const std::string& path, const Task* base = nullptr);
+/// @brief A task from JSON over `base`; `where` names the source in messages. Paths are kept
+/// as written.
+Task task_from_json(const nlohmann::json& j, const std::string& where, const Task& base);
+/// @brief The paper's swing-up task (read once from paper_task_path()).
+const Task& paper_task();
+
+nlohmann::json to_json(const Task& task);
+
+/// @brief A task made concrete for a model with n joints: validated vectors and settings.
+struct ResolvedTask {
+  Formulation formulation;
+  DerivativeMode derivatives;
+  VecX<double> q0, qref;
+  OcpWeights weights;
+  CgmresSettings cgmres;
+};
+/// @brief Throws std::invalid_argument naming the field (a scalar or n values expected,
+/// non-negative weights, finite values, valid C/GMRES settings).
+ResolvedTask resolve(const Task& task, int n);
+
+/// @brief One cell of the paper's Tables 1–3 (mjcf/paper_tables.json).
+struct PaperCell {
+  std::string table;  ///< "12" (arm4, N × kmax) or "3" (n-link chains)
+  std::string model;  ///< file name beside the tables file
+  int n = 0;
+  std::string formulation;
+  int N = 0, kmax = 0;
+  double ms = 0;      ///< the paper's mean ms per update
+  std::string mark;   ///< "*" FD diverged, "†" ID needed Q_a = 1e-4, or ""
+};
+struct PaperTables {
+  std::string source, machine;
+  std::string task;   ///< the task every cell runs (path resolved)
+  std::vector<PaperCell> cells;
+  /// @brief The paper's figure for a cell, or nullptr.
+  const PaperCell* find(const std::string& table, const std::string& formulation, int n, int N,
+                        int kmax) const;
+};
+PaperTables load_paper_tables(const std::string& path = paper_tables_path());
+
+}  // namespace idmpc

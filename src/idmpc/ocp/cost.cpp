@@ -1,0 +1,31 @@
+#include "idmpc/ocp/cost.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace idmpc {
+namespace {
+
+void check(const VecX<double>& x, Eigen::Index n, const char* what, bool non_negative) {
+  if (x.size() != n) {
+    throw std::invalid_argument(std::string(what) + " has " + std::to_string(x.size()) +
+                                " entries, expected " + std::to_string(n) + " (one per joint)");
+  }
+  if (!x.allFinite()) throw std::invalid_argument(std::string(what) + " is not finite");
+  if (non_negative && (x.array() < 0).any()) {
+    throw std::invalid_argument(std::string(what) + " must be non-negative");
+  }
+}
+
+}  // namespace
+
+QuadraticCost::QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n)
+    : w_(std::move(weights)), q_ref_(std::move(q_ref)) {
+  check(q_ref_, n, "q_ref", false);
+  check(w_.Qq, n, "weight Qq", true);
+  check(w_.Qv, n, "weight Qv", true);
+  check(w_.Qa, n, "weight Qa", true);
+  check(w_.R, n, "weight R", true);
+}
+
+}  // namespace idmpc

@@ -1,0 +1,47 @@
+#pragma once
+/// @file cost.hpp
+/// @brief The quadratic costs of DESIGN §4 (paper eqs. 32–34), by their gradients — all the
+/// optimality conditions need:
+///   φ(q, v)       = ½(q − q_ref)ᵀQ_q(q − q_ref) + ½vᵀQ_v v          (terminal)
+///   L(q, v, a, u) = φ(q, v) + ½aᵀQ_a a + ½uᵀR u                     (stage; Q_a only in ID)
+
+#include "idmpc/spatial/spatial.hpp"
+
+namespace idmpc {
+
+/// @brief Diagonal weights of the costs, each of size n.
+struct OcpWeights {
+  VecX<double> Qq, Qv, Qa, R;
+};
+
+class QuadraticCost {
+ public:
+  using In = Eigen::Ref<const VecX<double>>;
+  using Out = Eigen::Ref<VecX<double>>;
+
+  /// @brief Costs of an n-joint problem. Throws std::invalid_argument naming a weight or
+  /// q_ref of the wrong size, a non-finite entry or a negative weight.
+  QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n);
+
+  int n() const { return static_cast<int>(q_ref_.size()); }
+  const OcpWeights& weights() const { return w_; }
+  const VecX<double>& q_ref() const { return q_ref_; }
+
+  /// @brief ∂φ/∂q and ∂φ/∂v.
+  void terminal_gradient(In q, In v, Out phi_q, Out phi_v) const {
+    phi_q = w_.Qq.cwiseProduct(q - q_ref_);
+    phi_v = w_.Qv.cwiseProduct(v);
+  }
+  /// @brief The state part of ∂L/∂q and ∂L/∂v (equal to the terminal gradient's form).
+  void state_gradient(In q, In v, Out L_q, Out L_v) const { terminal_gradient(q, v, L_q, L_v); }
+  /// @brief ∂L/∂u = R u.
+  void torque_gradient(In u, Out L_u) const { L_u = w_.R.cwiseProduct(u); }
+  /// @brief ∂L/∂a = Q_a a (inverse-dynamics problem only).
+  void acceleration_gradient(In a, Out L_a) const { L_a = w_.Qa.cwiseProduct(a); }
+
+ private:
+  OcpWeights w_;
+  VecX<double> q_ref_;
+};
+
+}  // namespace idmpc

@@ -1,0 +1,148 @@
+#include "idmpc/ocp/problem.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <stdexcept>
+
+#include "idmpc/dynamics/dynamics.hpp"
+
+namespace idmpc {
+
+std::string to_string(Formulation f) { return f == Formulation::kForwardDynamics ? "fd" : "id"; }
+std::string to_string(DerivativeMode d) { return d == DerivativeMode::kMatrix ? "matrix" : "adjoint"; }
+
+Formulation parse_formulation(const std::string& s) {
+  if (s == "fd") return Formulation::kForwardDynamics;
+  if (s == "id") return Formulation::kInverseDynamics;
+  throw std::invalid_argument("unknown formulation '" + s + "': expected 'fd' or 'id'");
+}
+
+DerivativeMode parse_derivative_mode(const std::string& s) {
+  if (s == "matrix") return DerivativeMode::kMatrix;
+  if (s == "adjoint") return DerivativeMode::kAdjoint;
+  throw std::invalid_argument("unknown derivative mode '" + s + "': expected 'matrix' or 'adjoint'");
+}
+
+OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMode mode,
+                       QuadraticCost cost, int N)
+    : model_(model),
+      formulation_(formulation),
+      mode_(mode),
+      cost_(std::move(cost)),
+      N_(N),
+      lane_data_(model) {
+  const int n = model.n;
+  if (N < 1) throw std::invalid_argument("horizon steps N must be at least 1, got " + std::to_string(N));
+  if (cost_.n() != n) {
+    throw std::invalid_argument("the costs have " + std::to_string(cost_.n()) + " joints, the model " +
+                                std::to_string(n));
+  }
+  if (formulation_ == Formulation::kForwardDynamics && (cost_.weights().R.array() <= 0).any()) {
+    throw std::invalid_argument("the forward-dynamics problem needs R > 0 on every joint");
+  }
+  stage_.assign(static_cast<size_t>(N), Data(model));
+  for (Vec* x : {&w_, &gq_, &gv_, &lq_, &lv_, &la_}) *x = Vec::Zero(n);
+  for (VecX<StagePack>* x : {&ql_, &vl_, &al_, &wl_}) *x = VecX<StagePack>::Zero(n);
+  for (MatX<double>* x : {&gq_all_, &gv_all_, &Mw_all_}) *x = MatX<double>::Zero(n, N);
+  lanes_ = lanes_possible();
+}
+
+void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
+  assert(i >= 0 && i < N_);
+  Data& d = stage_[static_cast<size_t>(i)];
+  if (formulation_ == Formulation::kForwardDynamics) {
+    output = aba(model_, d, q, v, input);
+  } else if (mode_ == DerivativeMode::kAdjoint) {
+    output = rnea(model_, d, q, v, input);
+  } else {
+    // the derivatives' forward pass gives τ too: no separate RNEA
+    rnea_derivatives(model_, d, q, v, input);
+    output = d.tau;
+  }
+}
+
+// u = ID(q, v, a) and (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w with w = ∂L/∂u, for up to kStageLanes stages
+// per RNEA; unused lanes repeat the last stage
+void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
+                                      const MatX<double>& v, const MatX<double>& a, MatX<double>& u) {
+  assert(lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
+  const int n = model_.n;
+  for (int k = 0; k < kStageLanes; ++k) {
+    const int i = i0 + std::min(k, count - 1);
+    for (int j = 0; j < n; ++j) {
+      ql_[j][k] = q(j, i);
+      vl_[j][k] = v(j, i);
+      al_[j][k] = a(j, i);
+    }
+  }
+  const VecX<StagePack>& tau = rnea(model_, lane_data_, ql_, vl_, al_);
+  const VecX<double>& R = cost_.weights().R;
+  for (int j = 0; j < n; ++j) wl_[j] = R[j] * tau[j];
+  rnea_vjp(model_, lane_data_, wl_);
+  for (int k = 0; k < count; ++k) {
+    const int i = i0 + k;
+    for (int j = 0; j < n; ++j) {
+      u(j, i) = tau[j][k];
+      gq_all_(j, i) = lane_data_.g_q[j][k];
+      gv_all_(j, i) = lane_data_.g_v[j][k];
+      Mw_all_(j, i) = lane_data_.g_a[j][k];
+    }
+  }
+}
+
+void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In lmd_next, In gmm_next,
+                                   Out hq, Out hv, Out hu, bool state) {
+  assert(i >= 0 && i < N_);
+  Data& d = stage_[static_cast<size_t>(i)];
+  // gq_, gv_: the dynamics' part of ∂H/∂q, ∂H/∂v
+  if (formulation_ == Formulation::kInverseDynamics) {
+    // w = ∂L/∂u;  gq = (∂ID/∂q)ᵀw,  gv = (∂ID/∂v)ᵀw;  hu = γ_{i+1} + ∂L/∂a + M w
+    cost_.acceleration_gradient(a, la_);
+    if (lanes_) {
+      gq_ = gq_all_.col(i);
+      gv_ = gv_all_.col(i);
+      hu = gmm_next + la_ + Mw_all_.col(i);
+    } else if (mode_ == DerivativeMode::kAdjoint) {
+      cost_.torque_gradient(u, w_);
+      rnea_vjp(model_, d, w_);  // rnea at (q, v, a) is in d from stage_dynamics
+      gq_ = d.g_q;
+      gv_ = d.g_v;
+      hu = gmm_next + la_ + d.g_a;
+    } else {
+      // ∂τ/∂q, ∂τ/∂v and M are in d from stage_dynamics
+      cost_.torque_gradient(u, w_);
+      hu = gmm_next + la_;
+      hu.noalias() += d.M * w_;
+      if (state) {
+        gq_.noalias() = d.dtau_dq.transpose() * w_;
+        gv_.noalias() = d.dtau_dv.transpose() * w_;
+      }
+    }
+  } else {
+    // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = ∂L/∂u + μ
+    cost_.torque_gradient(u, w_);
+    if (mode_ == DerivativeMode::kAdjoint || !state) {
+      const VecX<double>& mu = minv_apply(model_, d, gmm_next);  // ABA factorization of stage i
+      hu = w_ + mu;
+      if (state) {
+        rnea(model_, d, q, v, a);
+        rnea_vjp(model_, d, mu);
+        gq_ = -d.g_q;
+        gv_ = -d.g_v;
+      }
+    } else {
+      aba_derivatives_after_aba(model_, d, q, v);  // ABA of stage i is in d from stage_dynamics
+      gq_.noalias() = d.da_dq.transpose() * gmm_next;
+      gv_.noalias() = d.da_dv.transpose() * gmm_next;
+      hu = w_;
+      hu.noalias() += d.Minv.transpose() * gmm_next;
+    }
+  }
+  if (!state) return;
+  // hq = ∂L/∂q + gq;  hv = ∂L/∂v + λ_{i+1} + gv (the Euler step q_{i+1} = q_i + Δτ v_i)
+  cost_.state_gradient(q, v, lq_, lv_);
+  hq = lq_ + gq_;
+  hv = lv_ + lmd_next + gv_;
+}
+
+}  // namespace idmpc

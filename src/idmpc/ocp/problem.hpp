@@ -1,0 +1,94 @@
+#pragma once
+/// @file problem.hpp
+/// @brief The two optimal control problems of DESIGN §4 as stage kernels: forward dynamics
+/// (input = torque u_i, paper's classic form) and inverse dynamics (input = acceleration a_i,
+/// paper eqs. 12, 16, 18, 22–25), each with derivatives by full matrices (the paper's way) or
+/// by O(n) adjoint sweeps (DESIGN §5).
+///
+/// A problem knows one stage at a time: its dynamics, and the derivatives of its discrete
+/// Hamiltonian H_i = L(x_i, ·) + λ_{i+1}ᵀ v_i + γ_{i+1}ᵀ a_i. How stages are chained (single or
+/// multiple shooting) is the solver layer's business: nothing here loops over the horizon.
+
+#include <string>
+#include <vector>
+
+#include "idmpc/model/data.hpp"
+#include "idmpc/ocp/cost.hpp"
+#include "idmpc/spatial/pack.hpp"
+
+namespace idmpc {
+
+enum class Formulation { kForwardDynamics, kInverseDynamics };
+enum class DerivativeMode { kMatrix, kAdjoint };
+
+/// @brief "fd"/"id" and "matrix"/"adjoint"; parse throws std::invalid_argument naming the value.
+std::string to_string(Formulation f);
+std::string to_string(DerivativeMode d);
+Formulation parse_formulation(const std::string& s);
+DerivativeMode parse_derivative_mode(const std::string& s);
+
+class OcpProblem {
+ public:
+  using Vec = VecX<double>;
+  using In = Eigen::Ref<const Vec>;
+  using Out = Eigen::Ref<Vec>;
+
+  /// @param N horizon stages (≥ 1): one dynamics workspace each, kept between the sweeps.
+  OcpProblem(const Model& model, Formulation formulation, DerivativeMode mode, QuadraticCost cost,
+             int N);
+  OcpProblem(const Model& model, Formulation formulation, DerivativeMode mode, OcpWeights weights,
+             Vec q_ref, int N)
+      : OcpProblem(model, formulation, mode, QuadraticCost(std::move(weights), std::move(q_ref), model.n), N) {}
+
+  int n() const { return model_.n; }
+  int N() const { return N_; }
+  const Model& model() const { return model_; }
+  Formulation formulation() const { return formulation_; }
+  DerivativeMode derivative_mode() const { return mode_; }
+  const QuadraticCost& cost() const { return cost_; }
+  const OcpWeights& weights() const { return cost_.weights(); }
+
+  /// @brief Stage i's dynamics at (q, v) with its input: FD a = FD(q, v, u) (ABA); ID
+  /// u = ID(q, v, a) (RNEA; in matrix mode with ∂ID/∂q, ∂ID/∂v and M from the same pass).
+  /// The stage's workspace keeps the linearization for stage_hamiltonian.
+  void stage_dynamics(int i, In q, In v, In input, Out output);
+
+  /// @brief ID with adjoints only: the stage dynamics and all stage products are independent
+  /// of the costates, so kStageLanes stages run at once in SIMD lanes. On by default.
+  bool lanes_possible() const {
+    return formulation_ == Formulation::kInverseDynamics && mode_ == DerivativeMode::kAdjoint;
+  }
+  void set_stages_in_lanes(bool on) { lanes_ = on && lanes_possible(); }
+  bool stages_in_lanes() const { return lanes_; }
+
+  /// @brief Stages i0 … i0 + count − 1 (count ≤ kStageLanes) at once: columns of q, v, a (n × N)
+  /// in, u (n × N) out; the products of each stage are kept for stage_hamiltonian.
+  void stage_dynamics_lanes(int i0, int count, const MatX<double>& q, const MatX<double>& v,
+                            const MatX<double>& a, MatX<double>& u);
+
+  /// @brief Derivatives of stage i's Hamiltonian at its linearization (after stage_dynamics):
+  /// hu = ∂H/∂input, the stage's block F_i of the optimality residual; with `state` also
+  /// hq = ∂H/∂q and hv = ∂H/∂v, so that the Euler costates are λ_i = λ_{i+1} + Δτ hq,
+  /// γ_i = γ_{i+1} + Δτ hv (DESIGN §4). Without `state` (stage 0), hq and hv are untouched.
+  void stage_hamiltonian(int i, In q, In v, In a, In u, In lmd_next, In gmm_next, Out hq, Out hv,
+                         Out hu, bool state);
+
+  /// @brief Terminal costates λ_N = ∂φ/∂q, γ_N = ∂φ/∂v (eqs. 16, 18).
+  void terminal_costate(In q, In v, Out lmd, Out gmm) const { cost_.terminal_gradient(q, v, lmd, gmm); }
+
+ private:
+  const Model& model_;
+  Formulation formulation_;
+  DerivativeMode mode_;
+  QuadraticCost cost_;
+  int N_;
+  bool lanes_ = false;
+
+  std::vector<Data> stage_;                 ///< one dynamics workspace per stage
+  DataTpl<StagePack> lane_data_;            ///< workspace of the stages in lanes
+  VecX<StagePack> ql_, vl_, al_, wl_;       ///< stage inputs packed in lanes
+  MatX<double> gq_all_, gv_all_, Mw_all_;   ///< per-stage products from the lanes, n × N
+  Vec w_, gq_, gv_, lq_, lv_, la_;          ///< stage scratch
+};
+
+}  // namespace idmpc

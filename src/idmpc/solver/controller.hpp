@@ -1,0 +1,67 @@
+#pragma once
+/// @file controller.hpp
+/// @brief The NMPC controller of the paper's closed loop: the problem, its single-shooting
+/// residual, the C/GMRES solver and the torque rule of eqs. 27–28, in one place.
+///
+/// Timing (DESIGN §6): the update made at time t from the measured x(t) yields the torque
+/// applied over [t + Δt, t + 2Δt), i.e. one sampling period later; the torque of the
+/// zero-horizon solution at t = 0 is applied over the first period.
+///   FD: τ = u_0 of the new solution (â_0 is not used).
+///   ID: τ = ID(q + Δt v, v + Δt â_0, a_0), a_0 from the new solution and â_0 the a_0 of the
+///       previous one, which the plant is executing while the controller computes.
+
+#include <string>
+
+#include "idmpc/model/data.hpp"
+#include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/single_shooting.hpp"
+
+namespace idmpc {
+
+class Controller {
+ public:
+  using Vec = VecX<double>;
+  using In = Eigen::Ref<const Vec>;
+
+  /// @brief Owns the problem and the solver; throws std::invalid_argument on bad settings.
+  Controller(OcpProblem problem, const CgmresSettings& settings);
+  Controller(const Controller&) = delete;
+  Controller& operator=(const Controller&) = delete;
+
+  int n() const { return nlp_.n(); }
+  double dt() const { return solver_.settings().dt; }
+  const OcpProblem& problem() const { return nlp_.problem(); }
+  const VecX<double>& q_ref() const { return nlp_.problem().cost().q_ref(); }
+  SingleShooting& nlp() { return nlp_; }
+  const Cgmres& solver() const { return solver_; }
+  Cgmres& solver() { return solver_; }
+
+  /// @brief Zero-horizon initialization from the measured x(0) = (q, v). Returns τ(0), the
+  /// torque to apply over the first sampling period. Throws std::runtime_error if the
+  /// initialization's residual is non-finite.
+  const Vec& initialize(In q, In v);
+
+  /// @brief One control update at time t from the measured (q, v). On success returns true
+  /// and torque() is τ(t + Δt); on divergence returns false and failure() says why.
+  bool update(double t, In q, In v);
+
+  /// @brief The torque of the last initialize/update.
+  const Vec& torque() const { return tau_; }
+  /// @brief â_0: the first-stage acceleration of the solution the plant is executing (ID;
+  /// zero in FD, whose rule does not use it).
+  const Vec& applied_acceleration() const { return a0_hat_; }
+  const std::string& failure() const { return failure_; }
+  double residual_norm() const { return solver_.residual_norm(); }
+
+ private:
+  // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given)
+  void torque_rule(In q, In v, In a0_hat, double dt);
+
+  SingleShooting nlp_;
+  Cgmres solver_;
+  Data data_;  ///< for the ID torque
+  Vec tau_, a0_hat_, q_pred_, v_pred_;
+  std::string failure_;
+};
+
+}  // namespace idmpc

@@ -1,0 +1,167 @@
+// Experiments are data: task files over the paper's base task, the paper's tables, and the run
+// record's one writer and one reader (a summary and a log survive a round trip unchanged).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+#include <unistd.h>
+#include <string>
+
+#include "idmpc/experiment/run_record.hpp"
+#include "idmpc/experiment/task.hpp"
+
+namespace idmpc {
+namespace {
+
+namespace fs = std::filesystem;
+
+class TempDir {
+ public:
+  TempDir() : path_(fs::temp_directory_path() / ("idmpc_experiment_" + std::to_string(::getpid()))) {
+    fs::create_directories(path_);
+  }
+  ~TempDir() { fs::remove_all(path_); }
+  std::string write(const std::string& name, const std::string& text) const {
+    const fs::path p = path_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+
+ private:
+  fs::path path_;
+};
+
+template <typename Fn> std::string message_of(Fn&& fn) {
+  try {
+    fn();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(PaperTask, IsTheDesignsSetup) {
+  const Task& t = paper_task();
+  EXPECT_EQ(fs::path(t.model).filename(), "arm4.xml");
+  EXPECT_TRUE(fs::exists(t.model)) << t.model;
+  EXPECT_EQ(t.q0_rule, "swingup");
+  EXPECT_EQ(t.N, 25);
+  EXPECT_EQ(t.kmax, 10);
+  const ResolvedTask r = resolve(t, 4);
+  EXPECT_EQ(r.q0, (VecX<double>(4) << -M_PI, 0, 0, 0).finished());
+  EXPECT_TRUE(r.qref.isZero(0.0));
+  EXPECT_EQ(r.weights.R, VecX<double>::Constant(4, 1e-4));
+  EXPECT_DOUBLE_EQ(r.cgmres.dt, 1e-3);
+  EXPECT_DOUBLE_EQ(t.Qa_fallback, 1e-4);
+}
+
+TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
+  TempDir dir;
+  const std::string path = dir.write("mine.json", R"({
+    "model": "robots/my_arm.xml", "q0": [0.1, 0.2], "qref": [1, 2], "formulation": "fd",
+    "weights": {"R": [0.01, 0.02]}, "cgmres": {"N": 10}})");
+  const Task t = load_task(path);
+  EXPECT_EQ(fs::path(t.model), fs::path(path).parent_path() / "robots/my_arm.xml");
+  EXPECT_EQ(t.formulation, "fd");
+  EXPECT_EQ(t.N, 10);
+  EXPECT_EQ(t.kmax, paper_task().kmax);        // from the base
+  EXPECT_EQ(t.Qq, paper_task().Qq);
+  const ResolvedTask r = resolve(t, 2);
+  EXPECT_EQ(r.q0, (VecX<double>(2) << 0.1, 0.2).finished());
+  EXPECT_EQ(r.weights.R, (VecX<double>(2) << 0.01, 0.02).finished());
+  EXPECT_EQ(r.formulation, Formulation::kForwardDynamics);
+}
+
+TEST(TaskFile, BadFilesNameFileAndField) {
+  TempDir dir;
+  const std::string typo = dir.write("typo.json", R"({"weigths": {}})");
+  EXPECT_NE(message_of([&] { load_task(typo); }).find("unknown field 'weigths'"), std::string::npos);
+  const std::string inner = dir.write("inner.json", R"({"cgmres": {"kmx": 3}})");
+  EXPECT_NE(message_of([&] { load_task(inner); }).find("'kmx'"), std::string::npos);
+  const std::string type = dir.write("type.json", R"({"cgmres": {"N": "many"}})");
+  const std::string m = message_of([&] { load_task(type); });
+  EXPECT_NE(m.find("type.json"), std::string::npos) << m;
+  EXPECT_NE(m.find("'N'"), std::string::npos) << m;
+  const std::string broken = dir.write("broken.json", "{");
+  EXPECT_NE(message_of([&] { load_task(broken); }).find("broken.json"), std::string::npos);
+  EXPECT_NE(message_of([&] { load_task(dir.write("q0.json", R"({"q0": "upright"})")); }).find("q0"),
+            std::string::npos);
+  // resolution names the option and the field
+  Task t = paper_task();
+  t.Qq = {1, 2, 3};
+  EXPECT_NE(message_of([&] { resolve(t, 4); }).find("--Qq (weights.Qq) has 3 values"), std::string::npos);
+  t = paper_task();
+  t.R = {-1};
+  EXPECT_NE(message_of([&] { resolve(t, 4); }).find("non-negative"), std::string::npos);
+}
+
+TEST(PaperTables, HoldTables1To3) {
+  const PaperTables t = load_paper_tables();
+  EXPECT_EQ(t.cells.size(), 32u);  // 2 × 3 × 4 for Tables 1–2, 2 × 4 for Table 3
+  const PaperCell* fd = t.find("12", "fd", 4, 25, 10);
+  const PaperCell* id = t.find("12", "id", 4, 25, 10);
+  ASSERT_TRUE(fd && id);
+  EXPECT_DOUBLE_EQ(fd->ms, 2.0);
+  EXPECT_DOUBLE_EQ(id->ms, 1.3);
+  EXPECT_EQ(t.find("12", "fd", 4, 10, 3)->mark, "*");
+  EXPECT_EQ(t.find("12", "id", 4, 50, 5)->mark, "†");
+  EXPECT_DOUBLE_EQ(t.find("3", "id", 32, 25, 10)->ms, 16);
+  EXPECT_EQ(t.task, paper_task_path());
+  for (const PaperCell& c : t.cells) {
+    EXPECT_TRUE(fs::exists(fs::path(t.task).parent_path() / c.model)) << c.model;
+  }
+}
+
+TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
+  RunSummary s;
+  s.task = paper_task();
+  s.task.formulation = "fd";
+  s.task.q0 = {0.5, 0, 0, 0};
+  s.task.q0_rule.clear();
+  s.n = 4;
+  s.steps = 123;
+  s.diverged = true;
+  s.diverged_at = 0.122;
+  s.divergence_reason = "why";
+  s.mean_update_ms = 1.5;
+  s.p50_update_ms = std::nan("");
+  s.unmodeled = {"contacts"};
+  const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");
+  EXPECT_EQ(to_json(back).dump(), to_json(s).dump());
+  EXPECT_EQ(back.label(), "C/GMRES (FD, adjoint) N=25 kmax=10");
+  EXPECT_TRUE(std::isnan(back.p50_update_ms));
+
+  nlohmann::json other = to_json(s);
+  other["schema"] = 99;
+  EXPECT_NE(message_of([&] { summary_from_json(other, "old.json"); }).find("old.json"), std::string::npos);
+  nlohmann::json missing = to_json(s);
+  missing.erase("steps");
+  EXPECT_NE(message_of([&] { summary_from_json(missing, "m.json"); }).find("m.json"), std::string::npos);
+}
+
+TEST(RunRecord, LogWrittenIsLogRead) {
+  TempDir dir;
+  std::ostringstream text;
+  {
+    RunLogWriter w(text, 2);
+    const VecX<double> q = (VecX<double>(2) << -3.1, 0.25).finished(), v = VecX<double>::Constant(2, 0.5),
+                       u = (VecX<double>(2) << 12.5, -1e-7).finished();
+    w.row(0.0, q, v, u, 1e-3, 0.2);
+    w.row(0.001, q, v, u, std::nan(""), 0.3);
+  }
+  const std::string path = dir.write("run.csv", text.str());
+  const RunLog log = read_run_log(path);
+  EXPECT_EQ(log.n, 2);
+  ASSERT_EQ(log.rows(), 2u);
+  EXPECT_DOUBLE_EQ(log.q_row(0)[0], -3.1);
+  EXPECT_DOUBLE_EQ(log.u_row(1)[1], -1e-7);
+  EXPECT_TRUE(std::isnan(log.residual[1]));
+  EXPECT_DOUBLE_EQ(log.update_ms[1], 0.3);
+  EXPECT_EQ(log.label, "run");
+}
+
+}  // namespace
+}  // namespace idmpc
