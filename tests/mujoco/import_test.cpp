@@ -273,11 +273,25 @@ TEST_F(ImportTest, UnmodeledReportListsActuatorRangesOnlyWhenMotorsAreUsed) {
 }
 
 TEST_F(ImportTest, ShippedAndRandomModelsHaveNothingUnmodeled) {
-  // they are written for the controller: no contacts, limits or tendons
+  // they are written for the controller: no contacts, tendons, friction loss... The real arms
+  // (mjcf/panda.xml, ...) keep their joint ranges, a plant feature, and their torque limits as
+  // actuator control ranges, which the controller reads as u_min/u_max (DESIGN.md section 8);
+  // the paper's models have neither.
+  const auto allowed = [](const std::string& item) {
+    return item.rfind("limit on joint ", 0) == 0 || item.rfind("control range of actuator ", 0) == 0;
+  };
   for (const std::string& path : test::shipped_model_paths()) {
     const mj::ModelPtr m = mj::load_model(path);
     const mj::ImportedModel imported = mj::import_model(m.get(), path);
-    EXPECT_TRUE(imported.unmodeled.empty()) << path << ":" << joined(imported.unmodeled);
+    bool ranged = false;
+    for (int u = 0; u < m->nu; ++u) ranged = ranged || m->actuator_ctrllimited[u];
+    if (!ranged) {
+      EXPECT_TRUE(imported.unmodeled.empty()) << path << ":" << joined(imported.unmodeled);
+      continue;
+    }
+    for (const std::string& item : imported.unmodeled) {
+      EXPECT_TRUE(allowed(item)) << path << ": " << item;
+    }
   }
   for (unsigned seed = 1; seed <= 10; ++seed) {
     const mj::ModelPtr m = mj::load_model_from_string(test::random_tree_mjcf(seed));
