@@ -33,9 +33,10 @@ class Log:
         self.update_ms = []
 
 
-def expected_header(n):
+def expected_header(n, commanded):
     return (["t"] + [f"q{j}" for j in range(n)] + [f"v{j}" for j in range(n)]
-            + [f"u{j}" for j in range(n)] + ["residual", "update_ms"])
+            + [f"u{j}" for j in range(n)] + ([f"uc{j}" for j in range(n)] if commanded else [])
+            + ["residual", "update_ms"])
 
 
 def read_log(path, label):
@@ -49,11 +50,12 @@ def read_log(path, label):
         raise LogError(f"log '{path}' is empty (expected a header t,q0,...,residual,update_ms)")
     header = [name.strip() for name in rows[0]]
     ncols = len(header)
-    n = (ncols - 3) // 3
-    if ncols < 6 or (ncols - 3) % 3 != 0 or header != expected_header(n):
+    commanded = "uc0" in header
+    n = (ncols - 3) // (4 if commanded else 3)
+    if n < 1 or header != expected_header(n, commanded):
         shown = ",".join(header[:8]) + (",..." if ncols > 8 else "")
         raise LogError(f"log '{path}' has a malformed header: expected "
-                       "t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms with n >= 1, "
+                       "t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,update_ms with n >= 1, "
                        f"got '{shown}' ({ncols} columns)")
     log = Log(path, label)
     log.n = n
@@ -75,8 +77,8 @@ def read_log(path, label):
             log.q[j].append(values[1 + j])
             log.v[j].append(values[1 + n + j])
             log.u[j].append(values[1 + 2 * n + j])
-        log.residual.append(values[1 + 3 * n])
-        log.update_ms.append(values[2 + 3 * n])
+        log.residual.append(values[-2])
+        log.update_ms.append(values[-1])
     if not log.t:
         raise LogError(f"log '{path}' has a header but no data rows")
     return log

@@ -44,6 +44,9 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_option("--Qa", t.Qa, "weight on a (ID only): scalar or one per joint"),
       [](const Task& s, Task& d) { d.Qa = s.Qa; });
   add(sub.add_option("--R", t.R, "weight on torque: scalar or one per joint"), [](const Task& s, Task& d) { d.R = s.R; });
+  add(sub.add_option("--torque-limit", t.torque_limit,
+                     "|torque| limit: scalar or one per joint (default: the model's actuator ranges)"),
+      [](const Task& s, Task& d) { d.torque_limit = s.torque_limit; });
   add(sub.add_flag("--direct-torque", t.direct_torque,
                    "ignore the model's actuators and apply joint torques directly"),
       [](const Task& s, Task& d) { d.direct_torque = s.direct_torque; });
@@ -71,6 +74,11 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
 
   Controller controller(OcpProblem(model, r.formulation, r.derivatives, r.weights, r.qref, task.N), r.cgmres);
   controller.nlp().set_stage_batching(task.simd_stages);
+  // the actuators' ranges, narrowed by the task's limit
+  const VecX<double> lower = imported.actuation.torque_lower.cwiseMax(-r.torque_limit);
+  const VecX<double> upper = imported.actuation.torque_upper.cwiseMin(r.torque_limit);
+  controller.set_torque_limits(lower, upper);
+  const bool limited = (lower.array().isFinite() || upper.array().isFinite()).any();
   mj::Plant plant(m.get(), imported.actuation);
   mj::ClosedLoopSettings ls;
   ls.duration = task.duration;
@@ -82,10 +90,10 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   std::optional<RunLogWriter> writer;
   if (!log_path.empty()) {
     log.emplace(log_path);
-    writer.emplace(log->stream(), n);
+    writer.emplace(log->stream(), n, limited);
   }
   auto on_step = [&](const mj::StepRecord& s) {
-    if (writer) writer->row(s.t, s.q, s.v, s.u, s.residual, s.update_ms);
+    if (writer) writer->row(s.t, s.q, s.v, s.u, s.u_commanded, s.residual, s.update_ms);
   };
   mj::RunResult result = mj::run_closed_loop(plant, controller, ls, on_step);
   if (log) log->commit();
@@ -113,6 +121,10 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   s.final_v_norm = result.final_v_norm;
   s.mean_residual = result.mean_residual;
   s.unmodeled = imported.unmodeled;
+  s.torque_lower.assign(lower.data(), lower.data() + n);
+  s.torque_upper.assign(upper.data(), upper.data() + n);
+  s.saturated_steps = result.saturated_steps;
+  s.saturated_any = result.saturated_any;
   return SwingupOutcome{std::move(result), std::move(s)};
 }
 
@@ -136,8 +148,13 @@ std::string human_summary(const RunSummary& s) {
     << s.p95_update_ms << ", max " << s.max_update_ms << "  (" << s.evaluations_per_update
     << " F evaluations)\n";
   o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
-  o << "  final max|q - qref| = " << s.final_q_error << " rad, |v| = " << s.final_v_norm
+  o << "  final max|q - qref| = " << s.final_q_error << ", |v| = " << s.final_v_norm
     << ", mean residual " << s.mean_residual << "\n";
+  if (s.saturated_any > 0) {
+    o << "  torque saturated on " << s.saturated_any << " of " << s.steps << " steps (per joint:";
+    for (long k : s.saturated_steps) o << ' ' << k;
+    o << ")\n";
+  }
   return o.str();
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <unistd.h>
@@ -129,10 +130,15 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
   s.mean_update_ms = 1.5;
   s.p50_update_ms = std::nan("");
   s.unmodeled = {"contacts"};
+  s.torque_lower = {-87, -std::numeric_limits<double>::infinity(), -1, -1};
+  s.torque_upper = {87, std::numeric_limits<double>::infinity(), 1, 1};
+  s.saturated_steps = {3, 0, 1, 0};
+  s.saturated_any = 4;
   const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");
   EXPECT_EQ(to_json(back).dump(), to_json(s).dump());
   EXPECT_EQ(back.label(), "C/GMRES (FD, adjoint) N=25 kmax=10");
   EXPECT_TRUE(std::isnan(back.p50_update_ms));
+  EXPECT_EQ(back.torque_upper, s.torque_upper);  // unbounded joints survive as null
 
   nlohmann::json other = to_json(s);
   other["schema"] = 99;
@@ -144,23 +150,33 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
 
 TEST(RunRecord, LogWrittenIsLogRead) {
   TempDir dir;
-  std::ostringstream text;
-  {
-    RunLogWriter w(text, 2);
-    const VecX<double> q = (VecX<double>(2) << -3.1, 0.25).finished(), v = VecX<double>::Constant(2, 0.5),
-                       u = (VecX<double>(2) << 12.5, -1e-7).finished();
-    w.row(0.0, q, v, u, 1e-3, 0.2);
-    w.row(0.001, q, v, u, std::nan(""), 0.3);
+  for (bool commanded : {false, true}) {
+    SCOPED_TRACE(commanded ? "with commanded torques" : "without");
+    std::ostringstream text;
+    {
+      RunLogWriter w(text, 2, commanded);
+      const VecX<double> q = (VecX<double>(2) << -3.1, 0.25).finished(), v = VecX<double>::Constant(2, 0.5),
+                         u = (VecX<double>(2) << 12.5, -1e-7).finished(), uc = (VecX<double>(2) << 99, -1e-7).finished();
+      w.row(0.0, q, v, u, uc, 1e-3, 0.2);
+      w.row(0.001, q, v, u, uc, std::nan(""), 0.3);
+    }
+    EXPECT_EQ(text.str().substr(0, text.str().find('\n')),
+              commanded ? "t,q0,q1,v0,v1,u0,u1,uc0,uc1,residual,update_ms" : "t,q0,q1,v0,v1,u0,u1,residual,update_ms");
+    const std::string path = dir.write("run.csv", text.str());
+    const RunLog log = read_run_log(path);
+    EXPECT_EQ(log.n, 2);
+    ASSERT_EQ(log.rows(), 2u);
+    EXPECT_DOUBLE_EQ(log.q_row(0)[0], -3.1);
+    EXPECT_DOUBLE_EQ(log.u_row(1)[0], 12.5);
+    EXPECT_DOUBLE_EQ(log.u_row(1)[1], -1e-7);
+    EXPECT_EQ(log.u_commanded.size(), commanded ? 4u : 0u);
+    if (commanded) {
+      EXPECT_DOUBLE_EQ(log.u_commanded[2], 99);
+    }
+    EXPECT_TRUE(std::isnan(log.residual[1]));
+    EXPECT_DOUBLE_EQ(log.update_ms[1], 0.3);
+    EXPECT_EQ(log.label, "run");
   }
-  const std::string path = dir.write("run.csv", text.str());
-  const RunLog log = read_run_log(path);
-  EXPECT_EQ(log.n, 2);
-  ASSERT_EQ(log.rows(), 2u);
-  EXPECT_DOUBLE_EQ(log.q_row(0)[0], -3.1);
-  EXPECT_DOUBLE_EQ(log.u_row(1)[1], -1e-7);
-  EXPECT_TRUE(std::isnan(log.residual[1]));
-  EXPECT_DOUBLE_EQ(log.update_ms[1], 0.3);
-  EXPECT_EQ(log.label, "run");
 }
 
 }  // namespace

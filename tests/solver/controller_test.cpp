@@ -149,3 +149,63 @@ TEST(ClosedLoop, AppliesEachTorqueOneStepAfterItsUpdate) {
 
 }  // namespace
 }  // namespace idmpc
+
+namespace idmpc {
+namespace {
+
+// With actuator limits the controller clamps: every torque the plant receives is within them,
+// the clamped steps are counted per joint, and the record keeps both the applied and the
+// commanded torque (the plant integrates the applied one).
+TEST(ClosedLoop, ClampsCountsAndRecordsSaturatedTorques) {
+  const test::Problem p = load_problem(kArm4);
+  const Model& model = p.model;
+  const int n = model.n;
+  constexpr double kLimit = 20.0;  // N m: the swing-up commands ~200 at first
+  Controller controller(OcpProblem(model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n),
+                                   VecX<double>::Zero(n), 25),
+                        CgmresSettings{});
+  controller.set_torque_limits(VecX<double>::Constant(n, -kLimit), VecX<double>::Constant(n, kLimit));
+  mj::Plant plant(p.m.get(), mj::import_model(p.m.get(), kArm4).actuation);
+  mj::ClosedLoopSettings ls;
+  ls.duration = 0.1;
+  ls.q0 = VecX<double>::Zero(n);
+  ls.q0[0] = -M_PI;
+  ls.v0 = VecX<double>::Zero(n);
+  ls.phase_timing = false;
+  std::vector<VecX<double>> q, v, u, uc;
+  const mj::RunResult r = mj::run_closed_loop(plant, controller, ls, [&](const mj::StepRecord& s) {
+    q.push_back(s.q);
+    v.push_back(s.v);
+    u.push_back(s.u);
+    uc.push_back(s.u_commanded);
+  });
+  std::vector<long> clamped(static_cast<size_t>(n), 0);
+  long any = 0;
+  for (size_t k = 0; k + 1 < u.size() || (!r.diverged && k < u.size()); ++k) {
+    EXPECT_LE(u[k].cwiseAbs().maxCoeff(), kLimit) << "step " << k;
+    bool row = false;
+    for (int j = 0; j < n; ++j) {
+      if (u[k][j] != uc[k][j]) {
+        EXPECT_EQ(std::abs(u[k][j]), kLimit);
+        EXPECT_GT(std::abs(uc[k][j]), kLimit);
+        ++clamped[static_cast<size_t>(j)];
+        row = true;
+      } else {
+        EXPECT_LE(std::abs(uc[k][j]), kLimit);
+      }
+    }
+    any += row;
+  }
+  EXPECT_GT(any, 10) << "the limit must bind in this test";
+  EXPECT_EQ(r.saturated_steps, clamped);
+  EXPECT_EQ(r.saturated_any, any);
+  // the plant integrated the applied (clamped) torque
+  Data data(model);
+  for (size_t k = 0; k + 1 < u.size(); ++k) {
+    const VecX<double> a = aba(model, data, q[k], v[k], u[k]);
+    EXPECT_LE(rel(v[k + 1], VecX<double>(v[k] + controller.dt() * a)), 1e-9) << "step " << k;
+  }
+}
+
+}  // namespace
+}  // namespace idmpc

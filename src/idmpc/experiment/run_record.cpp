@@ -16,7 +16,7 @@
 namespace idmpc {
 namespace {
 
-constexpr const char* kHeaderShape = "t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms";
+constexpr const char* kHeaderShape = "t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,update_ms";
 
 std::string trim(const std::string& s) {
   std::size_t b = 0;
@@ -49,6 +49,7 @@ int count_indexed(const std::vector<std::string>& cols, std::size_t at, const st
 struct Layout {
   int n = 0;
   int nu = 0;
+  bool commanded = false;  ///< uc* columns after u*
 };
 
 bool parse_header(const std::vector<std::string>& cols, Layout& layout) {
@@ -62,6 +63,8 @@ bool parse_header(const std::vector<std::string>& cols, Layout& layout) {
   layout.nu = count_indexed(cols, at, "u");
   if (layout.nu < 1) return false;
   at += static_cast<std::size_t>(layout.nu);
+  layout.commanded = count_indexed(cols, at, "uc") == layout.nu;
+  if (layout.commanded) at += static_cast<std::size_t>(layout.nu);
   return cols.size() == at + 2 && cols[at] == "residual" && cols[at + 1] == "update_ms";
 }
 
@@ -176,6 +179,10 @@ RunLog read_run_log(const std::string& csv_path) {
     log.t.push_back(time);
     log.q.insert(log.q.end(), values.begin() + q_at, values.begin() + q_at + log.n);
     log.u.insert(log.u.end(), values.begin() + u_at, values.begin() + u_at + log.nu);
+    if (layout.commanded) {
+      log.u_commanded.insert(log.u_commanded.end(), values.begin() + u_at + log.nu,
+                             values.begin() + u_at + 2 * log.nu);
+    }
     log.residual.push_back(values[columns - 2]);
     log.update_ms.push_back(values[columns - 1]);
   }
@@ -186,18 +193,20 @@ RunLog read_run_log(const std::string& csv_path) {
   return log;
 }
 
-RunLogWriter::RunLogWriter(std::ostream& out, int n) : out_(out), n_(n) {
+RunLogWriter::RunLogWriter(std::ostream& out, int n, bool commanded) : out_(out), n_(n), commanded_(commanded) {
   out_ << "t";
-  for (const char* p : {"q", "v", "u"}) {
+  for (const char* p : {"q", "v", "u", "uc"}) {
+    if (std::string(p) == "uc" && !commanded_) continue;
     for (int i = 0; i < n_; ++i) out_ << ',' << p << i;
   }
   out_ << ",residual,update_ms\n" << std::setprecision(10);
 }
 
 void RunLogWriter::row(double t, const VecX<double>& q, const VecX<double>& v, const VecX<double>& u,
-                       double residual, double update_ms) {
+                       const VecX<double>& u_commanded, double residual, double update_ms) {
   out_ << t;
-  for (const VecX<double>* x : {&q, &v, &u}) {
+  for (const VecX<double>* x : {&q, &v, &u, &u_commanded}) {
+    if (x == &u_commanded && !commanded_) continue;
     for (int i = 0; i < n_; ++i) out_ << ',' << (*x)[i];
   }
   out_ << ',' << residual << ',' << update_ms << '\n';
@@ -233,6 +242,16 @@ nlohmann::json to_json(const RunSummary& s) {
   j["final_v_norm"] = s.final_v_norm;
   j["mean_residual"] = s.mean_residual;
   j["unmodeled"] = s.unmodeled;
+  // infinite limits (unbounded joints) are written as null
+  auto limits = [](const std::vector<double>& x) {
+    nlohmann::json a = nlohmann::json::array();
+    for (double v : x) a.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr));
+    return a;
+  };
+  j["torque_lower"] = limits(s.torque_lower);
+  j["torque_upper"] = limits(s.torque_upper);
+  j["saturated_steps"] = s.saturated_steps;
+  j["saturated_any"] = s.saturated_any;
   return j;
 }
 
@@ -276,6 +295,15 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.final_v_norm = j.at("final_v_norm").get<double>();
     s.mean_residual = j.at("mean_residual").get<double>();
     s.unmodeled = j.at("unmodeled").get<std::vector<std::string>>();
+    auto limits = [&](const char* key, double unbounded) {
+      std::vector<double> x;
+      for (const auto& v : j.at(key)) x.push_back(v.is_null() ? unbounded : v.get<double>());
+      return x;
+    };
+    s.torque_lower = limits("torque_lower", -std::numeric_limits<double>::infinity());
+    s.torque_upper = limits("torque_upper", std::numeric_limits<double>::infinity());
+    s.saturated_steps = j.at("saturated_steps").get<std::vector<long>>();
+    s.saturated_any = j.at("saturated_any").get<long>();
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(where + ": missing or mistyped field (" + e.what() + ")");
   }

@@ -2,9 +2,10 @@
 /// @file run_record.hpp
 /// @brief The record of one closed-loop run, with one writer and one reader for each part
 /// (schema in docs/run_record.md):
-///   - the per-step log (CSV): `t,q0..q{n-1},v0..v{n-1},u0..u{n-1},residual,update_ms`, one row
-///     per control step: measured state, torque applied over [t, t + Δt), ‖F‖ at the start of
-///     the update, the update's wall time;
+///   - the per-step log (CSV): `t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,
+///     update_ms`, one row per control step: measured state, torque applied over [t, t + Δt),
+///     the torque commanded before clamping to the actuator limits (only for runs with limits),
+///     ‖F‖ at the start of the update, the update's wall time;
 ///   - the summary (JSON): schema version, the task as run, outcome and timing.
 
 #include <cstddef>
@@ -24,13 +25,15 @@ inline constexpr int kRunRecordSchema = 1;
 /// @brief Writes the per-step log: header at construction, then one row per call.
 class RunLogWriter {
  public:
-  RunLogWriter(std::ostream& out, int n);
+  /// @param commanded whether the log has the commanded-torque columns uc*
+  RunLogWriter(std::ostream& out, int n, bool commanded);
   void row(double t, const VecX<double>& q, const VecX<double>& v, const VecX<double>& u,
-           double residual, double update_ms);
+           const VecX<double>& u_commanded, double residual, double update_ms);
 
  private:
   std::ostream& out_;
   int n_;
+  bool commanded_;
 };
 
 /// @brief Outcome and timing of a run (the JSON summary), with the task it ran.
@@ -48,6 +51,9 @@ struct RunSummary {
   double rollout_ms = 0, costate_ms = 0, gmres_ms = 0;  ///< mean per update
   int evaluations_per_update = 0;
   double init_residual = 0, final_q_error = 0, final_v_norm = 0, mean_residual = 0;
+  std::vector<double> torque_lower, torque_upper;  ///< limits the plant's torques were held to
+  std::vector<long> saturated_steps;               ///< per joint: steps clamped to a limit
+  long saturated_any = 0;                          ///< steps with any joint clamped
   std::vector<std::string> unmodeled;
 
   /// @brief "C/GMRES (ID, adjoint) N=25 kmax=10"
@@ -76,6 +82,7 @@ struct RunLog {
   std::vector<double> t;          ///< rows
   std::vector<double> q;          ///< rows x n, row-major
   std::vector<double> u;          ///< rows x nu, row-major
+  std::vector<double> u_commanded;  ///< rows x nu, row-major, if the log has uc* columns
   std::vector<double> residual;   ///< rows
   std::vector<double> update_ms;  ///< rows
 

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -126,7 +127,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   const Reader r{j, where};
   if (!j.is_object()) throw std::invalid_argument(r.where + ": expected a JSON object");
   r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
-           "simd_stages", "direct_torque", "weights", "cgmres"});
+           "simd_stages", "direct_torque", "torque_limit", "weights", "cgmres"});
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
@@ -146,6 +147,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   r.get("derivatives", t.derivatives);
   r.get("simd_stages", t.simd_stages);
   r.get("direct_torque", t.direct_torque);
+  if (r.has("torque_limit")) r.get("torque_limit", t.torque_limit);
   if (r.has("weights")) {
     const Reader w = r.sub("weights");
     w.known({"Qq", "Qv", "Qa", "R", "Qa_fallback"});
@@ -190,6 +192,7 @@ nlohmann::json to_json(const Task& t) {
   j["derivatives"] = t.derivatives;
   j["simd_stages"] = t.simd_stages;
   j["direct_torque"] = t.direct_torque;
+  if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
   j["weights"] = {{"Qq", t.Qq}, {"Qv", t.Qv}, {"Qa", t.Qa}, {"R", t.R}, {"Qa_fallback", t.Qa_fallback}};
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
                  {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}};
@@ -197,7 +200,7 @@ nlohmann::json to_json(const Task& t) {
 }
 
 ResolvedTask resolve(const Task& t, int n) {
-  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}};
+  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}};
   if (t.N < 1) throw std::invalid_argument("N must be at least 1, got " + std::to_string(t.N));
   if (!(t.duration > 0) || !std::isfinite(t.duration)) {
     throw std::invalid_argument("duration must be positive, got " + std::to_string(t.duration));
@@ -209,6 +212,13 @@ ResolvedTask resolve(const Task& t, int n) {
   };
   r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa, "Qa"), weight(t.R, "R")};
   r.qref = finite(t.qref.empty() ? VecX<double>::Zero(n) : per_joint(t.qref, n, "--qref (qref)"), "--qref (qref)");
+  r.torque_limit = VecX<double>::Constant(n, std::numeric_limits<double>::infinity());
+  if (!t.torque_limit.empty()) {
+    r.torque_limit = per_joint(t.torque_limit, n, "--torque-limit (torque_limit)");
+    if (!(r.torque_limit.array() > 0).all() || r.torque_limit.hasNaN()) {
+      throw std::invalid_argument("--torque-limit (torque_limit) must be positive");
+    }
+  }
   if (t.q0_rule == "swingup") {
     r.q0 = VecX<double>::Zero(n);
     r.q0[0] = -M_PI;

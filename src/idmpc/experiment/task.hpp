@@ -14,6 +14,7 @@
 ///   "formulation"  "fd" or "id";  "derivatives": "matrix" or "adjoint"
 ///   "simd_stages"  ID + adjoint: evaluate horizon stages in SIMD lanes (bool)
 ///   "direct_torque" apply joint torques through qfrc_applied instead of the actuators (bool)
+///   "torque_limit" |τ_j| ≤ this: a scalar or one per joint (empty: the model's actuator ranges)
 ///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars or one per joint; "Qa_fallback": the Q_a
 ///                  an ID run that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h"}
@@ -41,6 +42,7 @@ struct Task {
   std::string formulation, derivatives;
   bool simd_stages = true;
   bool direct_torque = false;
+  std::vector<double> torque_limit;  ///< empty: the model's actuator ranges
   std::vector<double> Qq, Qv, Qa, R;
   double Qa_fallback = 0;
   int N = 0, kmax = 0;
@@ -68,6 +70,7 @@ struct ResolvedTask {
   Formulation formulation;
   DerivativeMode derivatives;
   VecX<double> q0, qref;
+  VecX<double> torque_limit;  ///< size n, +infinity where the task sets none
   OcpWeights weights;
   CgmresSettings cgmres;
 };

@@ -42,8 +42,9 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   result.update_ms.reserve(static_cast<size_t>(steps));
   VecX<double> q = plant.q(), v = plant.v();
   // the torque applied over the current period; the controller's output applies over the next
-  VecX<double> tau = controller.initialize(q, v);
+  VecX<double> tau = controller.initialize(q, v), tau_cmd = controller.commanded_torque();
   result.init_residual = controller.residual_norm();
+  result.saturated_steps.assign(static_cast<size_t>(n), 0);
   double residual_sum = 0;
   UpdateTimes phase_sum;
 
@@ -58,7 +59,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
 
     std::string reason = ok ? "" : controller.failure();
     // the row holds the measured state, the torque applied over [t, t + Δt) and this update
-    on_step(StepRecord{t, q, v, tau, controller.residual_norm(), ms});
+    on_step(StepRecord{t, q, v, tau, tau_cmd, controller.residual_norm(), ms});
     result.steps = static_cast<int>(k + 1);
     if (reason.empty()) {
       result.update_ms.push_back(ms);
@@ -69,6 +70,15 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
       phase_sum.costate += ph.costate;
       phase_sum.gmres += ph.gmres;
       result.evaluations_per_update = controller.solver().evaluations();
+      // saturation of the torque applied over this step
+      bool any = false;
+      for (int j = 0; j < n; ++j) {
+        if (tau[j] != tau_cmd[j]) {
+          ++result.saturated_steps[static_cast<size_t>(j)];
+          any = true;
+        }
+      }
+      result.saturated_any += any;
       if (!plant.step(tau, &reason)) {
         // the plant blew up under this torque: reason says how
       } else if (plant.v().cwiseAbs().maxCoeff() > kMaxSpeed) {
@@ -82,6 +92,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
       break;
     }
     tau = controller.torque();
+    tau_cmd = controller.commanded_torque();
   }
 
   const double m = std::max<double>(1.0, static_cast<double>(result.update_ms.size()));

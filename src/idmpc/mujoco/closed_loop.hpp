@@ -19,12 +19,15 @@ struct ClosedLoopSettings {
   bool phase_timing = true;  ///< split each update's time into rollout/costate/GMRES
 };
 
-/// @brief One control step as logged: measured state, applied torque, residual, cost.
+/// @brief One control step as logged: measured state, the torque the plant applied over
+/// [t, t + Δt) and the one the controller commanded (they differ where it saturated),
+/// residual and update time.
 struct StepRecord {
   double t;
   const VecX<double>& q;
   const VecX<double>& v;
   const VecX<double>& u;
+  const VecX<double>& u_commanded;
   double residual;
   double update_ms;
 };
@@ -40,6 +43,8 @@ struct RunResult {
   int evaluations_per_update = 0;   ///< F evaluations in one update
   UpdateTimes mean_phase_ms;        ///< mean of each phase [ms]
   VecX<double> final_q, final_v;
+  std::vector<long> saturated_steps;  ///< per joint: steps whose applied torque was clamped
+  long saturated_any = 0;           ///< steps with at least one clamped joint
   double final_q_error = 0;         ///< max |q_i − q_ref,i| at the end
   double final_v_norm = 0;
 };

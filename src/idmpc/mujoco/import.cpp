@@ -1,5 +1,7 @@
 #include "idmpc/mujoco/import.hpp"
 
+#include <algorithm>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,6 +36,9 @@ std::string joint_label(const mjModel* m, int j) {
 
 Actuation import_actuation(const mjModel* m, const std::string& source, const ImportOptions& options) {
   Actuation act;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  act.torque_lower = VecX<double>::Constant(m->nv, -kInf);
+  act.torque_upper = VecX<double>::Constant(m->nv, kInf);
   if (options.direct_torque || m->nu == 0) return act;
   act.direct = false;
   act.actuator_of_dof.assign(m->nv, -1);
@@ -65,6 +70,16 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
     }
     act.actuator_of_dof[dof] = u;
     act.ctrl_per_torque[dof] = 1.0 / gain;
+    // the torque range: control range through gain and gear, force range through the gear
+    const double gear = m->actuator_gear[6 * u];
+    auto bound = [&](double a, double b) {
+      act.torque_lower[dof] = std::max(act.torque_lower[dof], std::min(a, b));
+      act.torque_upper[dof] = std::min(act.torque_upper[dof], std::max(a, b));
+    };
+    if (m->actuator_ctrllimited[u]) bound(gain * m->actuator_ctrlrange[2 * u], gain * m->actuator_ctrlrange[2 * u + 1]);
+    if (m->actuator_forcelimited[u]) {
+      bound(gear * m->actuator_forcerange[2 * u], gear * m->actuator_forcerange[2 * u + 1]);
+    }
   }
   for (int i = 0; i < m->nv; ++i) {
     if (act.actuator_of_dof[i] < 0) {

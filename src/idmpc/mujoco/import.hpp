@@ -22,6 +22,9 @@ struct Actuation {
   bool direct = true;                ///< τ → qfrc_applied (actuation disabled)
   std::vector<int> actuator_of_dof;  ///< else ctrl[actuator_of_dof[i]] = τ_i · ctrl_per_torque[i]
   std::vector<double> ctrl_per_torque;
+  /// Joint torque range each actuator can give (ctrlrange × gain × gear, forcerange × gear);
+  /// ±infinity where unlimited, and always with direct torques.
+  VecX<double> torque_lower, torque_upper;
 };
 
 struct ImportedModel {

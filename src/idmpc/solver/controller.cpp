@@ -1,6 +1,9 @@
 #include "idmpc/solver/controller.hpp"
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
+#include <string>
 
 #include "idmpc/dynamics/rnea.hpp"
 
@@ -9,7 +12,25 @@ namespace idmpc {
 Controller::Controller(OcpProblem problem, const CgmresSettings& settings)
     : nlp_(std::move(problem)), solver_(nlp_, settings), data_(nlp_.problem().model()) {
   const int n = nlp_.n();
-  for (Vec* x : {&tau_, &a0_hat_, &q_pred_, &v_pred_}) *x = Vec::Zero(n);
+  for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_}) *x = Vec::Zero(n);
+  lower_ = Vec::Constant(n, -std::numeric_limits<double>::infinity());
+  upper_ = Vec::Constant(n, std::numeric_limits<double>::infinity());
+}
+
+void Controller::set_torque_limits(const Vec& lower, const Vec& upper) {
+  const int n = this->n();
+  if (lower.size() != n || upper.size() != n) {
+    throw std::invalid_argument("torque limits have " + std::to_string(lower.size()) + " and " +
+                                std::to_string(upper.size()) + " entries, expected " + std::to_string(n));
+  }
+  for (int j = 0; j < n; ++j) {
+    if (std::isnan(lower[j]) || std::isnan(upper[j]) || !(lower[j] < upper[j])) {
+      throw std::invalid_argument("torque limits of joint " + std::to_string(j) + ": expected lower < upper, got [" +
+                                  std::to_string(lower[j]) + ", " + std::to_string(upper[j]) + "]");
+    }
+  }
+  lower_ = lower;
+  upper_ = upper;
 }
 
 const VecX<double>& Controller::initialize(In q, In v) {
@@ -29,7 +50,7 @@ bool Controller::update(double t, In q, In v) {
     return false;
   }
   torque_rule(q, v, a0_hat_, dt());
-  if (!tau_.allFinite()) {
+  if (!tau_cmd_.allFinite()) {
     failure_ = "non-finite torque";
     return false;
   }
@@ -41,13 +62,16 @@ bool Controller::update(double t, In q, In v) {
 void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
   const auto U0 = solver_.solution().head(n());
   if (nlp_.formulation() == Formulation::kForwardDynamics) {
-    tau_ = U0;
-    return;
+    tau_cmd_ = U0;
+  } else {
+    // delay-compensated inverse dynamics (paper eqs. 27–28)
+    q_pred_ = q + dt * v;
+    v_pred_ = v + dt * a0_hat;
+    tau_cmd_ = rnea(nlp_.problem().model(), data_, q_pred_, v_pred_, U0);
   }
-  // delay-compensated inverse dynamics (paper eqs. 27–28)
-  q_pred_ = q + dt * v;
-  v_pred_ = v + dt * a0_hat;
-  tau_ = rnea(nlp_.problem().model(), data_, q_pred_, v_pred_, U0);
+  // the plant never receives a torque its actuator cannot give (a non-finite command is a
+  // divergence, reported by update)
+  tau_ = tau_cmd_.cwiseMax(lower_).cwiseMin(upper_);
 }
 
 }  // namespace idmpc

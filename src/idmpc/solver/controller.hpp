@@ -45,8 +45,19 @@ class Controller {
   /// and torque() is τ(t + Δt); on divergence returns false and failure() says why.
   bool update(double t, In q, In v);
 
-  /// @brief The torque of the last initialize/update.
+  /// @brief Actuator limits: every torque the controller returns lies in [lower, upper]
+  /// (±infinity: unbounded). Throws std::invalid_argument for sizes other than n, NaN, or
+  /// lower > upper.
+  void set_torque_limits(const Vec& lower, const Vec& upper);
+  const Vec& torque_lower() const { return lower_; }
+  const Vec& torque_upper() const { return upper_; }
+
+  /// @brief The torque of the last initialize/update, within the limits: what the plant gets.
   const Vec& torque() const { return tau_; }
+  /// @brief The torque the rule commanded before clamping to the limits.
+  const Vec& commanded_torque() const { return tau_cmd_; }
+  /// @brief Whether the last torque was clamped on joint j.
+  bool saturated(int j) const { return tau_[j] != tau_cmd_[j]; }
   /// @brief â_0: the first-stage acceleration of the solution the plant is executing (ID;
   /// zero in FD, whose rule does not use it).
   const Vec& applied_acceleration() const { return a0_hat_; }
@@ -54,13 +65,14 @@ class Controller {
   double residual_norm() const { return solver_.residual_norm(); }
 
  private:
-  // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given)
+  // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given), then
+  // clamped to the actuator limits
   void torque_rule(In q, In v, In a0_hat, double dt);
 
   SingleShooting nlp_;
   Cgmres solver_;
   Data data_;  ///< for the ID torque
-  Vec tau_, a0_hat_, q_pred_, v_pred_;
+  Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;
   std::string failure_;
 };
 
