@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iomanip>
+#include <iostream>
 #include <numeric>
 #include <sstream>
 #include <stdexcept>
@@ -70,7 +71,8 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   const mj::ImportedModel imported = mj::import_model(m.get(), task.model, mj::ImportOptions{task.direct_torque});
   const Model& model = imported.model;
   const int n = model.n;
-  const ResolvedTask r = resolve(task, n);
+  ResolvedTask r = resolve(task, n);
+  if (r.q0.size() == 0) r.q0 = mj::keyframe_qpos(m.get(), task.q0_rule, task.model);
 
   Controller controller(OcpProblem(model, r.formulation, r.derivatives, r.weights, r.qref, task.N), r.cgmres);
   controller.nlp().set_stage_batching(task.simd_stages);
@@ -80,6 +82,17 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   controller.set_torque_limits(lower, upper);
   const bool limited = (lower.array().isFinite() || upper.array().isFinite()).any();
   mj::Plant plant(m.get(), imported.actuation);
+  // what the run does not model or had to change, said before it starts
+  std::vector<std::string> warnings;
+  if (!imported.unmodeled.empty()) {
+    std::string list;
+    for (const auto& f : imported.unmodeled) list += (list.empty() ? "" : "; ") + f;
+    warnings.push_back("the plant has features the controller does not model: " + list);
+  }
+  for (const auto& w : mj::range_violations(m.get(), r.q0, "q0")) warnings.push_back(w);
+  for (const auto& w : mj::range_violations(m.get(), r.qref, "qref")) warnings.push_back(w);
+  if (std::string w = plant.set_control_period(r.cgmres.dt); !w.empty()) warnings.push_back(w);
+  for (const auto& w : warnings) std::cerr << "idmpc: warning: " << w << "\n";
   mj::ClosedLoopSettings ls;
   ls.duration = task.duration;
   ls.q0 = r.q0;
@@ -121,6 +134,7 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   s.final_v_norm = result.final_v_norm;
   s.mean_residual = result.mean_residual;
   s.unmodeled = imported.unmodeled;
+  s.warnings = warnings;
   s.torque_lower.assign(lower.data(), lower.data() + n);
   s.torque_upper.assign(upper.data(), upper.data() + n);
   s.saturated_steps = result.saturated_steps;

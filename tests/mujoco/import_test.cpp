@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <random>
 #include <stdexcept>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -258,28 +259,30 @@ TEST_F(ImportTest, UnmodeledReportListsLimitsContactsTendonsFrictionAndEqualitie
   EXPECT_EQ(imported.unmodeled.size(), 5u) << report;
 }
 
-TEST_F(ImportTest, UnmodeledReportListsActuatorRangesOnlyWhenMotorsAreUsed) {
+// actuator ranges are modelled: they become the torque limits the controller clamps to and
+// are no longer reported as unmodeled
+TEST_F(ImportTest, ActuatorRangesBecomeTorqueLimits) {
   const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
-      "", R"(<motor name="m0" joint="j0" ctrllimited="true" ctrlrange="-1 1"/>
-             <motor name="m1" joint="j1" forcelimited="true" forcerange="-5 5"/>
+      "", R"(<motor name="m0" joint="j0" gear="2" ctrllimited="true" ctrlrange="-1 1.5"/>
+             <motor name="m1" joint="j1" gear="-3" forcelimited="true" forcerange="-5 4"/>
              <motor name="m2" joint="j2"/>)"));
   const mj::ImportedModel motors = mj::import_model(m.get(), "ranges.xml");
-  const std::string report = joined(motors.unmodeled);
-  EXPECT_NE(report.find("control range of actuator 'm0'"), std::string::npos) << report;
-  EXPECT_NE(report.find("force range of actuator 'm1'"), std::string::npos) << report;
-  EXPECT_EQ(motors.unmodeled.size(), 2u) << report;
+  EXPECT_TRUE(motors.unmodeled.empty()) << joined(motors.unmodeled);
+  const double inf = std::numeric_limits<double>::infinity();
+  // ctrl range × gain × gear; force range × gear (a negative gear flips the interval)
+  EXPECT_EQ(motors.actuation.torque_lower, (VecX<double>(3) << -2, -12, -inf).finished());
+  EXPECT_EQ(motors.actuation.torque_upper, (VecX<double>(3) << 3, 15, inf).finished());
   // torques applied directly bypass the actuators and their ranges
-  EXPECT_TRUE(mj::import_model(m.get(), "ranges.xml", mj::ImportOptions{true}).unmodeled.empty());
+  const mj::ImportedModel direct = mj::import_model(m.get(), "ranges.xml", mj::ImportOptions{true});
+  EXPECT_TRUE(direct.unmodeled.empty());
+  EXPECT_EQ(direct.actuation.torque_upper, VecX<double>::Constant(3, inf));
 }
 
 TEST_F(ImportTest, ShippedAndRandomModelsHaveNothingUnmodeled) {
   // they are written for the controller: no contacts, tendons, friction loss... The real arms
-  // (mjcf/panda.xml, ...) keep their joint ranges, a plant feature, and their torque limits as
-  // actuator control ranges, which the controller reads as u_min/u_max (DESIGN.md section 8);
-  // the paper's models have neither.
-  const auto allowed = [](const std::string& item) {
-    return item.rfind("limit on joint ", 0) == 0 || item.rfind("control range of actuator ", 0) == 0;
-  };
+  // (mjcf/panda.xml, ...) keep their joint ranges, a plant feature (their torque limits, the
+  // actuators' control ranges, the controller models); the paper's models have neither.
+  const auto allowed = [](const std::string& item) { return item.rfind("limit on joint ", 0) == 0; };
   for (const std::string& path : test::shipped_model_paths()) {
     const mj::ModelPtr m = mj::load_model(path);
     const mj::ImportedModel imported = mj::import_model(m.get(), path);

@@ -242,6 +242,7 @@ nlohmann::json to_json(const RunSummary& s) {
   j["final_v_norm"] = s.final_v_norm;
   j["mean_residual"] = s.mean_residual;
   j["unmodeled"] = s.unmodeled;
+  j["warnings"] = s.warnings;
   // infinite limits (unbounded joints) are written as null
   auto limits = [](const std::vector<double>& x) {
     nlohmann::json a = nlohmann::json::array();
@@ -295,6 +296,7 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.final_v_norm = j.at("final_v_norm").get<double>();
     s.mean_residual = j.at("mean_residual").get<double>();
     s.unmodeled = j.at("unmodeled").get<std::vector<std::string>>();
+    s.warnings = j.at("warnings").get<std::vector<std::string>>();
     auto limits = [&](const char* key, double unbounded) {
       std::vector<double> x;
       for (const auto& v : j.at(key)) x.push_back(v.is_null() ? unbounded : v.get<double>());

@@ -55,6 +55,7 @@ struct RunSummary {
   std::vector<long> saturated_steps;               ///< per joint: steps clamped to a limit
   long saturated_any = 0;                          ///< steps with any joint clamped
   std::vector<std::string> unmodeled;
+  std::vector<std::string> warnings;  ///< said at the start: unmodeled features, ranges, timestep
 
   /// @brief "C/GMRES (ID, adjoint) N=25 kmax=10"
   std::string label() const;

@@ -134,7 +134,9 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   if (r.has("q0")) {
     if (j.at("q0").is_string()) {
       r.get("q0", t.q0_rule);
-      if (t.q0_rule != "swingup") r.bad("q0", "a list of joint positions or \"swingup\"");
+      if (t.q0_rule != "swingup" && t.q0_rule != "home") {
+        r.bad("q0", "a list of joint positions, \"swingup\" or \"home\"");
+      }
       t.q0.clear();
     } else {
       r.get("q0", t.q0);
@@ -222,6 +224,8 @@ ResolvedTask resolve(const Task& t, int n) {
   if (t.q0_rule == "swingup") {
     r.q0 = VecX<double>::Zero(n);
     r.q0[0] = -M_PI;
+  } else if (t.q0_rule == "home") {
+    r.q0.resize(0);  // the model's keyframe: the caller with the model fills it in
   } else {
     if (static_cast<int>(t.q0.size()) != n) {
       throw std::invalid_argument("--q0 (q0) has " + std::to_string(t.q0.size()) + " values, expected " +

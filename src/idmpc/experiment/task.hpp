@@ -8,7 +8,8 @@
 /// Task file fields (all optional in a user's file: missing ones come from the base task, the
 /// paper's swing-up; unknown fields are an error):
 ///   "model"        path of the MJCF/URDF file, relative to the task file's directory
-///   "q0"           initial joint positions, one per joint, or "swingup" = (−π, 0, …, 0)
+///   "q0"           initial joint positions, one per joint, "swingup" = (−π, 0, …, 0) or
+///                  "home" = the model's keyframe named home
 ///   "qref"         target joint positions: a scalar or one per joint
 ///   "duration"     simulated seconds
 ///   "formulation"  "fd" or "id";  "derivatives": "matrix" or "adjoint"
@@ -35,7 +36,7 @@ struct Task {
   std::string source;  ///< the task file it was read from, for messages
   std::string description;
   std::string model;   ///< model path, resolved against the task file's directory
-  std::string q0_rule;             ///< "swingup" or "" (then q0 holds the values)
+  std::string q0_rule;             ///< "swingup", "home" or "" (then q0 holds the values)
   std::vector<double> q0;
   std::vector<double> qref;
   double duration = 0;
@@ -69,7 +70,7 @@ nlohmann::json to_json(const Task& task);
 struct ResolvedTask {
   Formulation formulation;
   DerivativeMode derivatives;
-  VecX<double> q0, qref;
+  VecX<double> q0, qref;           ///< q0 empty for "home": the model's keyframe
   VecX<double> torque_limit;  ///< size n, +infinity where the task sets none
   OcpWeights weights;
   CgmresSettings cgmres;

@@ -34,11 +34,12 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   }
   const double dt = controller.dt();
   const long steps = std::lround(settings.duration / dt);
-  plant.set_timestep(dt);
+  const std::string timestep_warning = plant.set_control_period(dt);
   plant.reset(settings.q0, settings.v0);
   controller.solver().enable_timing(settings.phase_timing);
 
   RunResult result;
+  if (!timestep_warning.empty()) result.warnings.push_back(timestep_warning);
   result.update_ms.reserve(static_cast<size_t>(steps));
   VecX<double> q = plant.q(), v = plant.v();
   // the torque applied over the current period; the controller's output applies over the next

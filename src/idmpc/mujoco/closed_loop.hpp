@@ -43,13 +43,15 @@ struct RunResult {
   int evaluations_per_update = 0;   ///< F evaluations in one update
   UpdateTimes mean_phase_ms;        ///< mean of each phase [ms]
   VecX<double> final_q, final_v;
+  std::vector<std::string> warnings;  ///< e.g. the model's timestep replaced
   std::vector<long> saturated_steps;  ///< per joint: steps whose applied torque was clamped
   long saturated_any = 0;           ///< steps with at least one clamped joint
   double final_q_error = 0;         ///< max |q_i − q_ref,i| at the end
   double final_v_norm = 0;
 };
 
-/// @brief Runs the closed loop from (q0, v0) for `duration`, calling on_step for each logged
+/// @brief Runs the closed loop from (q0, v0) for `duration` (the plant's control period set to
+/// the controller's Δt beforehand, Plant::set_control_period), calling on_step for each logged
 /// step: plant I/O only, the controller owns the timing of its torques (eqs. 27–28). A
 /// divergence ends the run cleanly: it is recorded in the result, never thrown.
 RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,

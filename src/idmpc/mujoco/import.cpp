@@ -92,7 +92,7 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
   return act;
 }
 
-std::vector<std::string> unmodeled_features(const mjModel* m, const Actuation& act) {
+std::vector<std::string> unmodeled_features(const mjModel* m) {
   std::vector<std::string> out;
   const bool contacts_on = !(m->opt.disableflags & (mjDSBL_CONTACT | mjDSBL_CONSTRAINT));
   int colliding = 0;
@@ -109,16 +109,6 @@ std::vector<std::string> unmodeled_features(const mjModel* m, const Actuation& a
   if (m->ntendon > 0) out.push_back(std::to_string(m->ntendon) + " tendon(s)");
   if (m->neq > 0) out.push_back(std::to_string(m->neq) + " equality constraint(s)");
   if (m->opt.density > 0 || m->opt.viscosity > 0) out.push_back("fluid forces (density/viscosity)");
-  if (!act.direct) {
-    for (int u = 0; u < m->nu; ++u) {
-      if (m->actuator_ctrllimited[u]) {
-        out.push_back("control range of actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'");
-      }
-      if (m->actuator_forcelimited[u]) {
-        out.push_back("force range of actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'");
-      }
-    }
-  }
   return out;
 }
 
@@ -197,7 +187,31 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
                                                          : vec3(m->opt.gravity);
   model.finalize();
   out.actuation = import_actuation(m, source, options);
-  out.unmodeled = unmodeled_features(m, out.actuation);
+  out.unmodeled = unmodeled_features(m);
+  return out;
+}
+
+VecX<double> keyframe_qpos(const mjModel* m, const std::string& name, const std::string& source) {
+  const int k = mj_name2id(m, mjOBJ_KEY, name.c_str());
+  if (k < 0) {
+    throw std::invalid_argument("model '" + source + "' has no keyframe '" + name +
+                                "' (q0 \"" + name + "\" needs one; give q0 as joint values instead)");
+  }
+  return Eigen::Map<const VecX<double>>(m->key_qpos + static_cast<size_t>(k) * m->nq, m->nq);
+}
+
+std::vector<std::string> range_violations(const mjModel* m, const VecX<double>& q, const std::string& what) {
+  std::vector<std::string> out;
+  for (int j = 0; j < m->njnt && j < q.size(); ++j) {
+    const int i = m->jnt_qposadr[j];
+    const double lo = m->jnt_range[2 * j], hi = m->jnt_range[2 * j + 1];
+    if (m->jnt_limited[j] && (q[i] < lo || q[i] > hi)) {
+      std::ostringstream o;
+      o << what << " of " << joint_label(m, j) << " is " << q[i] << ", outside its range [" << lo << ", " << hi
+        << "]";
+      out.push_back(o.str());
+    }
+  }
   return out;
 }
 

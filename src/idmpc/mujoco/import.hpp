@@ -39,4 +39,12 @@ struct ImportedModel {
 ImportedModel import_model(const mjModel* m, const std::string& source,
                            const ImportOptions& options = {});
 
+/// @brief qpos of the keyframe called `name`; throws std::invalid_argument naming the model if
+/// it has none.
+VecX<double> keyframe_qpos(const mjModel* m, const std::string& name, const std::string& source);
+
+/// @brief One message per joint whose value in q (named `what`, e.g. "q0") lies outside the
+/// joint's range, for limited joints.
+std::vector<std::string> range_violations(const mjModel* m, const VecX<double>& q, const std::string& what);
+
 }  // namespace idmpc::mj

@@ -1,5 +1,7 @@
 #include "idmpc/mujoco/plant.hpp"
 
+#include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace idmpc::mj {
@@ -12,9 +14,22 @@ Plant::Plant(const mjModel* m, const Actuation& actuation) : actuation_(actuatio
   d_ = make_data(m_.get());
 }
 
-void Plant::set_timestep(double dt) {
-  if (!(dt > 0)) throw std::invalid_argument("plant timestep must be positive, got " + std::to_string(dt));
+std::string Plant::set_control_period(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) {
+    throw std::invalid_argument("control period must be positive, got " + std::to_string(dt));
+  }
+  const double ratio = dt / m_->opt.timestep;
+  const double whole = std::round(ratio);
+  if (whole >= 1 && std::abs(ratio - whole) <= 1e-9 * whole) {
+    substeps_ = static_cast<int>(whole);
+    return "";
+  }
+  std::ostringstream o;
+  o << "the model's timestep " << m_->opt.timestep << " s is replaced by the control period " << dt
+    << " s (not a whole multiple of it)";
   m_->opt.timestep = dt;
+  substeps_ = 1;
+  return o.str();
 }
 
 void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
@@ -42,7 +57,7 @@ bool Plant::step(const VecX<double>& tau, std::string* reason) {
   }
   int warnings_before = 0;
   for (int w = 0; w < mjNWARNING; ++w) warnings_before += d_->warning[w].number;
-  mj_step(m_.get(), d_.get());
+  for (int k = 0; k < substeps_; ++k) mj_step(m_.get(), d_.get());
   int warnings_after = 0;
   for (int w = 0; w < mjNWARNING; ++w) warnings_after += d_->warning[w].number;
   // MuJoCo resets the state on a bad acceleration: that is a divergence, not a new start

@@ -17,8 +17,11 @@ class Plant {
 
   int nv() const { return m_->nv; }
   double timestep() const { return m_->opt.timestep; }
-  /// @brief Sets the sampling period used by step (MuJoCo's timestep).
-  void set_timestep(double dt);
+  /// @brief Sets the control period: each step() holds the torque for dt. If dt is a whole
+  /// multiple of the model's timestep, step() makes that many MuJoCo steps; otherwise the
+  /// model's timestep is replaced by dt and the returned warning says so (else empty).
+  std::string set_control_period(double dt);
+  int substeps() const { return substeps_; }
   void reset(const VecX<double>& q, const VecX<double>& v);
   /// @brief Applies τ (through the motors or qfrc_applied) for one step. Returns false with
   /// a reason if the state became non-finite or MuJoCo raised a warning (e.g. bad qacc).
@@ -33,6 +36,7 @@ class Plant {
   ModelPtr m_;
   DataPtr d_;
   Actuation actuation_;
+  int substeps_ = 1;
 };
 
 }  // namespace idmpc::mj
