@@ -1,0 +1,58 @@
+#pragma once
+/// @file run_overlay.hpp
+/// @brief The overlays over a video of runs: a table of the time and each run's label, |u|,
+/// residual, update time and status, and a plot of |u| over time.
+
+#include <string>
+#include <vector>
+
+#include <mujoco/mujoco.h>
+
+#include "idmpc/render/framing.hpp"
+#include "idmpc/render/overlay.hpp"
+#include "idmpc/render/replay.hpp"
+#include "idmpc/render/video.hpp"
+
+namespace idmpc::render {
+
+/// single run: the |u| curve in a neutral colour (the arm keeps its own colours)
+inline constexpr Rgb kSinglePlot = {0.92f, 0.92f, 0.92f};
+
+/// @brief MuJoCo font scale for a video height (MuJoCo 2.2 renders mjFONTSCALE_50 as 100:
+/// 100 is the smallest).
+int font_scale_for(int height);
+
+/// @brief The table and the |u| plot of one run (or two in compare mode, with a colour legend),
+/// sized for the widest frame so the panels keep still: the table top left, the plot bottom
+/// right, dropped on a video too small to hold both.
+class RunOverlay {
+ public:
+  /// @param replays the runs, in the order of `colours` (kept by reference)
+  /// @param colours one per run: its legend swatch and plot curve colour
+  /// @param con MuJoCo's render context (fonts), kept by reference
+  RunOverlay(const std::vector<Replay>& replays, const std::vector<Rgb>& colours,
+             const Schedule& schedule, const VideoOptions& options, const mjrContext& con);
+
+  /// @brief The rectangles the shown overlays cover, in normalized device coordinates.
+  std::vector<ScreenRegion> regions() const;
+
+  /// @brief Draws the shown overlays for time t over the current framebuffer.
+  void draw(double t);
+
+ private:
+  std::vector<Row> rows_at(double t) const;
+
+  const std::vector<Replay>& replays_;
+  std::vector<Rgb> colours_;
+  double speed_ = 1;
+  int width_ = 0, height_ = 0;
+  const mjrContext& con_;
+  TableLayout table_;
+  TimePlot plot_;
+  mjrRect table_rect_{0, 0, 0, 0};
+  mjrRect plot_rect_{0, 0, 0, 0};
+  bool show_table_ = false;
+  bool show_plot_ = false;
+};
+
+}  // namespace idmpc::render
