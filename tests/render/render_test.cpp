@@ -2,10 +2,13 @@
 // with ffprobe and by decoding frames back to pixels.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,14 +16,20 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <iterator>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/render/framing.hpp"
 #include "idmpc/render/gl_context.hpp"
+#include "idmpc/render/overlay.hpp"
+#include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/run_log.hpp"
+#include "idmpc/render/run_overlay.hpp"
 #include "idmpc/render/video.hpp"
 #include "idmpc/render/video_writer.hpp"
 
@@ -469,7 +478,96 @@ TEST_F(RenderTest, DivergedRunHoldsItsLastPose) {
   EXPECT_GE(count_hue(last, link_colour(m.get()).h), 40) << "the arm vanished after divergence";
 }
 
+// ------------------------------------------------------------------------------- progress
+
+std::string read_all(std::FILE* f) {
+  std::rewind(f);
+  std::string text;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) text.append(buffer, n);
+  return text;
+}
+
+// off a terminal (a file, a pipe, a CI log): ten plain lines, no carriage returns
+TEST(ProgressPrinterTest, PrintsPlainLinesOffATerminal) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer("rendering x.mp4", f);
+    EXPECT_FALSE(printer.terminal());
+    for (int k = 1; k <= 31; ++k) printer(k / 31.0);
+  }
+  const std::string text = read_all(f);
+  std::fclose(f);
+  EXPECT_EQ(text.find('\r'), std::string::npos) << text;
+  std::string expected;
+  for (int p = 10; p <= 100; p += 10) expected += "rendering x.mp4: " + std::to_string(p) + "%\n";
+  EXPECT_EQ(text, expected);
+}
+
+// on a terminal: redrawn in place, one newline at the end (or when interrupted)
+TEST(ProgressPrinterTest, RedrawsInPlaceOnATerminal) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer("rendering", f, true);
+    for (int k = 1; k <= 4; ++k) printer(k / 4.0);
+  }
+  {
+    ProgressPrinter interrupted("rendering", f, true);
+    interrupted(0.5);
+  }
+  const std::string text = read_all(f);
+  std::fclose(f);
+  EXPECT_EQ(text, "\rrendering:  25%\rrendering:  50%\rrendering:  75%\rrendering: 100%\n"
+                  "\rrendering:  50%\n");
+}
+
+// a real terminal is told from isatty
+TEST(ProgressPrinterTest, TellsATerminal) {
+  const int master = posix_openpt(O_RDWR | O_NOCTTY);
+  if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
+    if (master >= 0) close(master);
+    GTEST_SKIP() << "no pseudo-terminal available";
+  }
+  std::FILE* tty = std::fopen(ptsname(master), "w");
+  ASSERT_NE(tty, nullptr);
+  {
+    ProgressPrinter printer("rendering", tty);
+    EXPECT_TRUE(printer.terminal());
+    printer(1.0);
+  }
+  std::fclose(tty);
+  std::string text;
+  pollfd p{master, POLLIN, 0};
+  char buffer[256];
+  while (poll(&p, 1, 200) > 0 && (p.revents & POLLIN)) {
+    const ssize_t n = read(master, buffer, sizeof(buffer));
+    if (n <= 0) break;
+    text.append(buffer, static_cast<std::size_t>(n));
+  }
+  close(master);
+  EXPECT_NE(text.find("\rrendering: 100%"), std::string::npos) << text;
+}
+
 // ------------------------------------------------------------------------------- command line
+
+// stderr to a file: plain progress lines, no carriage returns
+TEST_F(RenderTest, CommandLineProgressInALogHasNoCarriageReturns) {
+  const std::string csv = dir_.file("cli.csv");
+  write_log(csv, 4, 0.3);
+  const std::string out = dir_.file("cli.mp4");
+  const std::string err = dir_.file("stderr.txt");
+  const CommandResult ok = run(std::string("'") + IDMPC_BINARY + "' render '" + kModel +
+                               "' --log '" + csv + "' --out '" + out +
+                               "' --width 320 --height 240 2>'" + err + "'");
+  ASSERT_EQ(ok.status, 0);
+  std::ifstream in(err);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find('\r'), std::string::npos) << text;
+  EXPECT_NE(text.find("rendering " + out + ": 100%\n"), std::string::npos) << text;
+}
 
 TEST_F(RenderTest, CommandLineRendersAndReportsErrors) {
   const std::string csv = dir_.file("cli.csv");
