@@ -311,6 +311,29 @@ TEST_F(RenderTest, UnwritableOutputIsRejectedBeforeRendering) {
   }
 }
 
+// a 2-row log spanning 33000 s would be 990001 frames: refused before anything is rendered
+TEST_F(RenderTest, AbsurdVideoLengthIsRefusedUpFront) {
+  const std::string csv = dir_.file("long.csv");
+  std::ofstream(csv) << "t,q0,q1,q2,q3,v0,v1,v2,v3,u0,u1,u2,u3,residual,update_ms\n"
+                     << "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n"
+                     << "33000,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n";
+  const RunLog log = read_run_log(csv);
+  const std::string out = dir_.file("long.mp4");
+  VideoOptions options;  // 30 fps, 1 h of video at most: 108000 frames
+  const std::string msg = message_of<std::invalid_argument>([&] {
+    render_video(kModel, {log}, options, out,
+                 [](double) { throw std::runtime_error("the render started"); });
+  });
+  EXPECT_NE(msg.find("990001 frames"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("108000"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("3600 s of video"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(video_frame_count(1.0, options), 31);
+  EXPECT_THROW(video_frame_count(33000, options), std::invalid_argument);
+  options.max_video_seconds = 0;
+  EXPECT_THROW(check_video_options(options), std::invalid_argument);
+}
+
 TEST_F(RenderTest, BadOptionsAreRejected) {
   const std::string csv = dir_.file("run.csv");
   write_log(csv, 4, 0.2);

@@ -1,24 +1,9 @@
 #include "idmpc/render/replay.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <cstdio>
 #include <limits>
-#include <stdexcept>
-#include <string>
 
 namespace idmpc::render {
-namespace {
-
-constexpr long kMaxFrames = 1000000;  // ~9 h at 30 fps: anything more is a typo
-
-std::string fmt(const char* format, double value) {
-  char text[64];
-  std::snprintf(text, sizeof(text), format, value);
-  return text;
-}
-
-}  // namespace
 
 Replay::Replay(const RunLog& run) : log(&run), bad_from(run.rows()) {
   // the first row whose pose is not finite
@@ -55,15 +40,7 @@ Schedule make_schedule(const std::vector<Replay>& replays, const VideoOptions& o
     s.t_end = std::max(s.t_end, r.log->t.back());
   }
   s.step = options.speed / options.fps;
-  // both ends shown: t0, t0 + step, ..., the last frame at or just before t_end
-  const double count = std::floor((s.t_end - s.t0) / s.step + 1e-9) + 1;
-  if (count > static_cast<double>(kMaxFrames)) {
-    throw std::invalid_argument(
-        "video length: expected at most " + std::to_string(kMaxFrames) + " frames, got " +
-        fmt("%.0f", count) + " (a log of " + fmt("%g", s.t_end - s.t0) + " s at --fps " +
-        fmt("%g", options.fps) + " and --speed " + fmt("%g", options.speed) + ")");
-  }
-  s.frames = static_cast<long>(count);
+  s.frames = video_frame_count(s.t_end - s.t0, options);
   return s;
 }
 

@@ -3,6 +3,7 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -21,6 +22,7 @@ namespace {
 constexpr int kMaxSize = 8192;  // pixels per side
 constexpr double kMaxFps = 240;
 constexpr double kMaxSpeed = 1000;
+constexpr double kMaxVideoSeconds = 24 * 3600;  // bound of the bound: a day of video
 
 std::string fmt(const char* format, double value) {
   char text[64];
@@ -83,7 +85,29 @@ void check_video_options(const VideoOptions& options) {
     throw std::invalid_argument("--speed: expected 0 < speed <= " + fmt("%g", kMaxSpeed) +
                                 ", got " + fmt("%g", options.speed));
   }
+  if (!(options.max_video_seconds > 0) || options.max_video_seconds > kMaxVideoSeconds) {
+    throw std::invalid_argument("max_video_seconds: expected 0 < seconds <= " +
+                                fmt("%g", kMaxVideoSeconds) + ", got " +
+                                fmt("%g", options.max_video_seconds));
+  }
   parse_camera(options.camera);
+}
+
+long video_frame_count(double log_seconds, const VideoOptions& options) {
+  // both ends shown: t0, t0 + step, ..., the last frame at or just before the end
+  const double step = options.speed / options.fps;
+  const double count = std::floor(std::max(log_seconds, 0.0) / step + 1e-9) + 1;
+  // at most max_video_seconds of video at the given fps
+  const double limit = std::ceil(options.max_video_seconds * options.fps);
+  if (!(count <= limit)) {
+    throw std::invalid_argument(
+        "video length: expected at most " + fmt("%.0f", limit) + " frames (" +
+        fmt("%g", options.max_video_seconds) + " s of video at --fps " + fmt("%g", options.fps) +
+        "), got " + fmt("%.0f", count) + " frames (" + fmt("%g", log_seconds) +
+        " s of log at --speed " + fmt("%g", options.speed) +
+        "); raise --speed or render a shorter log");
+  }
+  return static_cast<long>(count);
 }
 
 void render_video(const std::string& model_path, const std::vector<RunLog>& runs,
@@ -95,16 +119,6 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
     throw std::invalid_argument("runs: expected one log (or two to compare), got " +
                                 std::to_string(runs.size()));
   }
-  mj::ModelPtr model = mj::load_model(model_path);
-  mjModel* m = model.get();
-  for (const RunLog& run : runs) check_run_log(run, m, model_path);
-  const CameraSpec camera_spec = parse_camera(options.camera);
-  const int fixed_camid = find_fixed_camera(m, camera_spec, model_path);
-  check_output_writable(out_mp4);
-  if (find_on_path("ffmpeg").empty()) {
-    throw std::runtime_error("ffmpeg not found on PATH: install the Debian package ffmpeg");
-  }
-
   // compare mode: the FD run (or else the first) is the blue arm, the other the orange core
   const bool compare = runs.size() == 2;
   std::vector<std::size_t> order{0};
@@ -117,7 +131,19 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
     replays.emplace_back(runs[i]);
     colours.push_back(compare ? (replays.size() == 1 ? kBlue : kOrange) : kSinglePlot);
   }
+  // the frames' times; a video too long is refused here
   const Schedule schedule = make_schedule(replays, options);
+
+  mj::ModelPtr model = mj::load_model(model_path);
+  mjModel* m = model.get();
+  for (const RunLog& run : runs) check_run_log(run, m, model_path);
+  const CameraSpec camera_spec = parse_camera(options.camera);
+  const int fixed_camid = find_fixed_camera(m, camera_spec, model_path);
+  check_output_writable(out_mp4);
+  if (find_on_path("ffmpeg").empty()) {
+    throw std::runtime_error("ffmpeg not found on PATH: install the Debian package ffmpeg");
+  }
+
   std::vector<mj::DataPtr> data_owner;
   std::vector<mjData*> datas;
   for (std::size_t r = 0; r < replays.size(); ++r) {
