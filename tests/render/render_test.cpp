@@ -97,6 +97,26 @@ void write_log(const std::string& path, int n, double duration, double lag = 0,
   }
 }
 
+// a 4-joint log in memory: rows every dt over [0, duration], |u| from u_of(t) on joint 0
+RunLog memory_log(double duration, double dt, const std::function<double(double)>& u_of) {
+  RunLog log;
+  log.path = "memory.csv";
+  log.label = "memory";
+  log.n = 4;
+  log.nu = 4;
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * dt;
+    log.t.push_back(t);
+    for (int i = 0; i < 4; ++i) log.q.push_back(0.0);
+    log.u.push_back(u_of(t));
+    for (int i = 1; i < 4; ++i) log.u.push_back(0.0);
+    log.residual.push_back(1e-4);
+    log.update_ms.push_back(0.5);
+  }
+  return log;
+}
+
 struct CommandResult {
   int status = -1;
   std::string out;
@@ -499,6 +519,48 @@ TEST_F(RenderTest, DivergedRunHoldsItsLastPose) {
   const std::vector<unsigned char> last = decode_frame(out, 15);
   mj::ModelPtr m = mj::load_model(kModel);
   EXPECT_GE(count_hue(last, link_colour(m.get()).h), 40) << "the arm vanished after divergence";
+}
+
+// ------------------------------------------------------------------------------- overlay
+
+// |u| with a 3 ms spike of 235 N m in 2 s at 1 ms rows: the plot at 1280 x 720 (384 pixels
+// wide) must show the spike at its full height
+TEST_F(RenderTest, UPlotShowsShortPeaksAtFullHeight) {
+  constexpr double kSpike = 235;
+  const RunLog log = memory_log(2.0, 1e-3, [](double t) {
+    return (t > 0.4995 && t < 0.5025) ? kSpike : 50.0;
+  });
+  const auto curve = u_envelope(log, 0.0, 2.0, 384);
+  ASSERT_FALSE(curve.empty());
+  float peak = 0;
+  for (const auto& p : curve) peak = std::max(peak, p[1]);
+  EXPECT_FLOAT_EQ(peak, kSpike);
+  EXPECT_LE(curve.size(), 384u);
+
+  // the plot's value axis reaches the spike
+  TimePlot plot("|u| [N m]", 0.0, 2.0, {PlotCurve{curve, {1, 1, 1}, false}});
+  EXPECT_GE(plot.value_top(), kSpike);
+
+  // a curve thinned to the plot's sample limit keeps its peak too
+  std::vector<std::array<float, 2>> raw;
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    raw.push_back({static_cast<float>(log.t[i]), static_cast<float>(log.u_norm(i))});
+  }
+  TimePlot thinned("|u| [N m]", 0.0, 2.0, {PlotCurve{raw, {1, 1, 1}, false}});
+  ASSERT_LE(thinned.curves()[0].points.size(), static_cast<std::size_t>(kPlotMaxSamples));
+  float thinned_peak = 0;
+  for (const auto& p : thinned.curves()[0].points) thinned_peak = std::max(thinned_peak, p[1]);
+  EXPECT_FLOAT_EQ(thinned_peak, kSpike);
+}
+
+TEST_F(RenderTest, UEnvelopeStopsWhereTheLogTurnsNonFinite) {
+  const RunLog log = memory_log(1.0, 1e-2, [](double t) {
+    return t < 0.5 ? 10.0 : std::numeric_limits<double>::quiet_NaN();
+  });
+  const auto curve = u_envelope(log, 0.0, 1.0, 100);
+  ASSERT_FALSE(curve.empty());
+  EXPECT_LT(curve.back()[0], 0.5f);
+  for (const auto& p : curve) EXPECT_FLOAT_EQ(p[1], 10.0f);
 }
 
 // ------------------------------------------------------------------------------- progress

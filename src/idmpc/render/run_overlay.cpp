@@ -8,7 +8,6 @@
 namespace idmpc::render {
 namespace {
 
-constexpr int kPlotSamples = 800;  // |u| samples per run in the plot (<= mjMAXLINEPNT)
 constexpr Rgb kKey = {0.70f, 0.70f, 0.70f};
 constexpr Rgb kWhite = {1, 1, 1};
 constexpr Rgb kAlert = {1.00f, 0.40f, 0.30f};
@@ -77,28 +76,24 @@ std::vector<Row> compare_rows(const std::vector<Replay>& replays, const std::vec
   return rows;
 }
 
-// |u| over time until the log ends or turns non-finite
-std::vector<std::array<float, 2>> u_curve(const Replay& r, const Schedule& s) {
-  std::vector<std::array<float, 2>> curve;
-  for (int i = 0; i < kPlotSamples; ++i) {
-    const double t = s.t0 + (s.t_end - s.t0) * i / (kPlotSamples - 1);
-    if (t < r.log->t.front() - 1e-9) continue;
-    if (t > r.log->t.back() + 1e-9) break;
-    const double u = r.log->u_norm(r.log->nearest_row(t));
-    if (!std::isfinite(u)) break;
-    curve.push_back({static_cast<float>(t), static_cast<float>(u)});
-  }
-  return curve;
-}
-
 // compare: the second run's curve dashed on top, like its arm's stripe on the first
 std::vector<PlotCurve> u_curves(const std::vector<Replay>& replays,
-                                const std::vector<Rgb>& colours, const Schedule& schedule) {
+                                const std::vector<Rgb>& colours, const Schedule& schedule,
+                                int columns) {
   std::vector<PlotCurve> curves;
   for (std::size_t r = 0; r < replays.size(); ++r) {
-    curves.push_back({u_curve(replays[r], schedule), colours[r], r > 0});
+    curves.push_back(
+        {u_envelope(*replays[r].log, schedule.t0, schedule.t_end, columns), colours[r], r > 0});
   }
   return curves;
+}
+
+// the plot's size in pixels: about 30 % x 28 % of the frame, at least what its labels need
+int plot_width(const mjrContext& con, int width) {
+  return std::max(24 * con.charWidth[static_cast<unsigned char>('0')], width * 30 / 100);
+}
+int plot_height(const mjrContext& con, int height) {
+  return std::max(8 * con.charHeight, height * 28 / 100);
 }
 
 // pixel rectangle -> normalized device coordinates
@@ -108,6 +103,52 @@ ScreenRegion to_ndc(const mjrRect& r, int width, int height) {
 }
 
 }  // namespace
+
+std::vector<std::array<float, 2>> u_envelope(const RunLog& log, double t0, double t1,
+                                             int columns) {
+  std::vector<std::array<float, 2>> curve;
+  if (log.rows() == 0 || columns < 1) return curve;
+  // a zero-length time axis: one point
+  if (!(t1 > t0)) {
+    const double u = log.u_norm(log.nearest_row(t0));
+    if (std::isfinite(u)) curve.push_back({static_cast<float>(t0), static_cast<float>(u)});
+    return curve;
+  }
+  const double span = (t1 - t0) / columns;
+  for (int c = 0; c < columns; ++c) {
+    // the rows inside this column's time span (the last span includes t1)
+    const double a = t0 + span * c;
+    const double b = c + 1 == columns ? t1 : t0 + span * (c + 1);
+    if (b < log.t.front() - 1e-9) continue;
+    if (a > log.t.back() + 1e-9) break;
+    const auto first = std::lower_bound(log.t.begin(), log.t.end(), a);
+    const auto last = c + 1 == columns ? std::upper_bound(log.t.begin(), log.t.end(), b)
+                                       : std::lower_bound(log.t.begin(), log.t.end(), b);
+    auto i = static_cast<std::size_t>(first - log.t.begin());
+    const auto end = static_cast<std::size_t>(last - log.t.begin());
+    // their largest |u|, up to the first non-finite one; the nearest row's if there is none
+    double peak = -1;
+    bool finite = true;
+    if (i == end) {
+      peak = log.u_norm(log.nearest_row(0.5 * (a + b)));
+      finite = std::isfinite(peak);
+    }
+    for (; i < end; ++i) {
+      const double u = log.u_norm(i);
+      if (!std::isfinite(u)) {
+        finite = false;
+        break;
+      }
+      peak = std::max(peak, u);
+    }
+    if (peak >= 0 && std::isfinite(peak)) {
+      curve.push_back({static_cast<float>(0.5 * (a + b)), static_cast<float>(peak)});
+    }
+    // the curve ends where the log turns non-finite
+    if (!finite) break;
+  }
+  return curve;
+}
 
 int font_scale_for(int height) {
   if (height < 600) return mjFONTSCALE_100;
@@ -125,15 +166,16 @@ RunOverlay::RunOverlay(const std::vector<Replay>& replays, const std::vector<Rgb
       height_(options.height),
       con_(con),
       table_(con),
-      plot_("|u| [N m]", schedule.t0, schedule.t_end, u_curves(replays, colours, schedule)) {
+      plot_("|u| [N m]", schedule.t0, schedule.t_end,
+            u_curves(replays, colours, schedule,
+                     std::min(kPlotMaxSamples, plot_width(con, options.width)))) {
   // the table top left, sized for its widest frame
   for (long k = 0; k < schedule.frames; ++k) table_.fit(rows_at(schedule.time(k)));
   const int margin = std::max(4, height_ / 80);
   table_rect_ = {margin, height_ - margin - table_.height(), table_.width(), table_.height()};
   // the plot bottom right
-  const int plot_w = std::max(24 * con.charWidth[static_cast<unsigned char>('0')],
-                              width_ * 30 / 100);
-  const int plot_h = std::max(8 * con.charHeight, height_ * 28 / 100);
+  const int plot_w = plot_width(con, width_);
+  const int plot_h = plot_height(con, height_);
   plot_rect_ = {width_ - plot_w - margin, margin, plot_w, plot_h};
   // a small video keeps the table and drops the plot rather than stack them
   show_table_ = options.overlay;

@@ -3,6 +3,7 @@
 /// @brief The overlays over a video of runs: a table of the time and each run's label, |u|,
 /// residual, update time and status, and a plot of |u| over time.
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,14 @@ namespace idmpc::render {
 
 /// single run: the |u| curve in a neutral colour (the arm keeps its own colours)
 inline constexpr Rgb kSinglePlot = {0.92f, 0.92f, 0.92f};
+
+/// @brief |u| of a run for a plot whose time axis [t0, t1] spans `columns` pixels: per column
+/// the largest |u| of the log rows inside its time span (the nearest row's when none is),
+/// placed at the span's middle, so a peak shorter than a pixel still shows at its full height.
+/// The curve leaves out columns before the log starts and stops where the log ends or |u|
+/// turns non-finite.
+std::vector<std::array<float, 2>> u_envelope(const RunLog& log, double t0, double t1,
+                                             int columns);
 
 /// @brief MuJoCo font scale for a video height (MuJoCo 2.2 renders mjFONTSCALE_50 as 100:
 /// 100 is the smallest).
