@@ -521,6 +521,34 @@ TEST_F(RenderTest, DivergedRunHoldsItsLastPose) {
   EXPECT_GE(count_hue(last, link_colour(m.get()).h), 40) << "the arm vanished after divergence";
 }
 
+// a compare video keeps static world geometry in its own colours: here a green pedestal in a
+// body welded to the world (MuJoCo 2.2 files such bodies as dynamic)
+TEST_F(RenderTest, CompareVideoLeavesStaticGeometryUntinted) {
+  std::ifstream in(kModel);
+  std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string arm = "<body name=\"link0\"";
+  ASSERT_NE(xml.find(arm), std::string::npos);
+  xml.insert(xml.find(arm),
+             "<body name=\"pedestal\" pos=\"1.2 0 3.4\"><geom name=\"pedestal\" type=\"box\" "
+             "size=\"0.4 0.4 0.4\" rgba=\"0.1 0.8 0.2 1\"/></body>\n    ");
+  const std::string model = dir_.file("pedestal.xml");
+  std::ofstream(model) << xml;
+
+  const std::string a = dir_.file("fd.csv");
+  const std::string b = dir_.file("id.csv");
+  write_log(a, 4, 0.3);
+  write_log(b, 4, 0.3, 0.1);
+  const std::string out = dir_.file("compare.mp4");
+  VideoOptions options = small_options();
+  options.overlay = false;
+  render_video(model, {read_run_log(a), read_run_log(b)}, options, out);
+  const std::vector<unsigned char> rgb = decode_frame(out, 4);
+  ASSERT_EQ(rgb.size(), static_cast<std::size_t>(kWidth * kHeight * 3));
+  EXPECT_GE(count_hue(rgb, to_hsv(0.1, 0.8, 0.2).h), 40) << "the static pedestal was recoloured";
+  EXPECT_GE(count_hue(rgb, to_hsv(0.18, 0.48, 1.0).h), 40) << "no blue (first) arm";
+  EXPECT_GE(count_hue(rgb, to_hsv(1.0, 0.52, 0.08).h), 40) << "no orange (second) arm";
+}
+
 // ------------------------------------------------------------------------------- overlay
 
 // |u| with a 3 ms spike of 235 N m in 2 s at 1 ms rows: the plot at 1280 x 720 (384 pixels

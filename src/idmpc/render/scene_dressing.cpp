@@ -44,6 +44,23 @@ float thin_geom(mjvGeom& g, float factor) {
 
 }  // namespace
 
+bool moving_geom(const mjModel* m, const mjvGeom& g) {
+  if (g.objtype != mjOBJ_GEOM || g.objid < 0 || g.objid >= m->ngeom) return false;
+  return m->body_weldid[m->geom_bodyid[g.objid]] != 0;
+}
+
+void keep_moving_geoms(mjvScene& scn, const mjModel* m, int from) {
+  // compact in place: other objects (decor, sites) stay, static model geoms go
+  int kept = from;
+  for (int i = from; i < scn.ngeom; ++i) {
+    const mjvGeom& g = scn.geoms[i];
+    if (g.objtype == mjOBJ_GEOM && !moving_geom(m, g)) continue;
+    if (kept != i) scn.geoms[kept] = g;
+    ++kept;
+  }
+  scn.ngeom = kept;
+}
+
 bool has_plane(const mjModel* m) {
   for (int g = 0; g < m->ngeom; ++g) {
     if (m->geom_type[g] == mjGEOM_PLANE) return true;
@@ -104,17 +121,17 @@ void add_key_light(mjvScene& scn, const Bounds& motion, const Vec3& view_forward
   light.castshadow = 1;
 }
 
-void recolour(mjvScene& scn, int from, const Rgb& rgb) {
+void recolour(mjvScene& scn, const mjModel* m, int from, const Rgb& rgb) {
   auto lum = [](const float* c) { return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2]; };
   // the brightest moving geom maps to the full colour
   float lum_max = 1e-3f;
   for (int i = from; i < scn.ngeom; ++i) {
-    if (scn.geoms[i].category == mjCAT_DYNAMIC) lum_max = std::max(lum_max, lum(scn.geoms[i].rgba));
+    if (moving_geom(m, scn.geoms[i])) lum_max = std::max(lum_max, lum(scn.geoms[i].rgba));
   }
   // solid, untextured, unreflective: the colour alone tells the run
   for (int i = from; i < scn.ngeom; ++i) {
     mjvGeom& g = scn.geoms[i];
-    if (g.category != mjCAT_DYNAMIC || g.objtype != mjOBJ_GEOM) continue;
+    if (!moving_geom(m, g)) continue;
     const float shade = 0.4f + 0.6f * std::min(1.0f, lum(g.rgba) / lum_max);
     for (std::size_t k = 0; k < 3; ++k) g.rgba[k] = rgb[k] * shade;
     g.rgba[3] = 1;
@@ -124,20 +141,18 @@ void recolour(mjvScene& scn, int from, const Rgb& rgb) {
   }
 }
 
-void make_cores(mjvScene& scn, int from, const Vec3& eye) {
+void make_cores(mjvScene& scn, const mjModel* m, int from, const Vec3& eye) {
   // thin every moving geom, remembering the thickest arm cross-section
   float across = 0;
   for (int i = from; i < scn.ngeom; ++i) {
     mjvGeom& g = scn.geoms[i];
-    if (g.category == mjCAT_DYNAMIC && g.objtype == mjOBJ_GEOM) {
-      across = std::max(across, thin_geom(g, kCoreScale));
-    }
+    if (moving_geom(m, g)) across = std::max(across, thin_geom(g, kCoreScale));
   }
   // pull each towards the eye by more than that
   const double lift = 1.1 * across * (1 + kCoreScale);
   for (int i = from; i < scn.ngeom; ++i) {
     mjvGeom& g = scn.geoms[i];
-    if (g.category != mjCAT_DYNAMIC || g.objtype != mjOBJ_GEOM) continue;
+    if (!moving_geom(m, g)) continue;
     const Vec3 to_eye = vsub(eye, Vec3{g.pos[0], g.pos[1], g.pos[2]});
     const double dist = std::sqrt(vdot(to_eye, to_eye));
     if (dist <= 2 * lift) continue;

@@ -16,6 +16,15 @@ inline constexpr Rgb kBlue = {0.18f, 0.48f, 1.00f};
 /// compare mode: the other run a thinner solid orange core
 inline constexpr Rgb kOrange = {1.00f, 0.52f, 0.08f};
 
+/// @brief Whether a scene geom belongs to one of the robot's moving bodies (a body with a joint
+/// between it and the world). Static world geometry is not: the world body's geoms and those of
+/// bodies welded to the world (a base, a table, a mocap body), whatever their MuJoCo category.
+bool moving_geom(const mjModel* m, const mjvGeom& g);
+
+/// @brief Removes the model geoms of static bodies from scene geoms `from` on (a second run
+/// adds only its moving bodies; MuJoCo 2.2 counts bodies welded to the world as dynamic).
+void keep_moving_geoms(mjvScene& scn, const mjModel* m, int from);
+
 /// @brief Whether the model has a ground plane.
 bool has_plane(const mjModel* m);
 
@@ -29,14 +38,15 @@ void add_floor(mjvScene& scn, const Bounds& motion);
 /// lights.
 void add_key_light(mjvScene& scn, const Bounds& motion, const Vec3& view_forward);
 
-/// @brief Recolours a run's moving geoms (scene geoms from index `from` on) in `rgb`,
-/// preserving their relative luminance (dark parts stay darker).
-void recolour(mjvScene& scn, int from, const Rgb& rgb);
+/// @brief Recolours a run's moving geoms (scene geoms from index `from` on; static world
+/// geometry keeps its colours) in `rgb`, preserving their relative luminance (dark parts stay
+/// darker).
+void recolour(mjvScene& scn, const mjModel* m, int from, const Rgb& rgb);
 
 /// @brief Turns a run's moving geoms (from index `from` on) into thin cores moved towards the
 /// eye by more than the other arm's thickness, so they are drawn on top of it wherever the two
 /// arms coincide.
-void make_cores(mjvScene& scn, int from, const Vec3& eye);
+void make_cores(mjvScene& scn, const mjModel* m, int from, const Vec3& eye);
 
 /// @brief Draws a vertical gradient wherever nothing was drawn (depth still 1), for models
 /// without a skybox; call after mjr_render on a width x height viewport.

@@ -196,11 +196,12 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
       const Vec3 eye{0.5 * (scn.camera[0].pos[0] + scn.camera[1].pos[0]),
                      0.5 * (scn.camera[0].pos[1] + scn.camera[1].pos[1]),
                      0.5 * (scn.camera[0].pos[2] + scn.camera[1].pos[2])};
-      recolour(scn, 0, colours[0]);
+      recolour(scn, m, 0, colours[0]);
       const int first = scn.ngeom;
       mjv_addGeoms(m, datas[1], &opt, nullptr, mjCAT_DYNAMIC, &scn);
-      recolour(scn, first, colours[1]);
-      make_cores(scn, first, eye);
+      keep_moving_geoms(scn, m, first);
+      recolour(scn, m, first, colours[1]);
+      make_cores(scn, m, first, eye);
     }
     if (dress_floor) add_floor(scn, motion.visible);
     if (dress_light) add_key_light(scn, motion.visible, view_forward);
