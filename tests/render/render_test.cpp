@@ -97,6 +97,25 @@ void write_log(const std::string& path, int n, double duration, double lag = 0,
   }
 }
 
+// a log holding one pose (the arm still) for `duration` seconds
+void write_pose_log(const std::string& path, const std::vector<double>& q, double duration,
+                    double dt = 1e-2) {
+  std::ofstream out(path);
+  const std::size_t n = q.size();
+  out << std::setprecision(12) << "t";
+  for (const char* p : {"q", "v", "u"}) {
+    for (std::size_t i = 0; i < n; ++i) out << ',' << p << i;
+  }
+  out << ",residual,update_ms\n";
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  for (int k = 0; k <= steps; ++k) {
+    out << k * dt;
+    for (double qi : q) out << ',' << qi;
+    for (std::size_t i = 0; i < 2 * n; ++i) out << ',' << 0.0;
+    out << ",1e-4,0.5\n";
+  }
+}
+
 // a 4-joint log in memory: rows every dt over [0, duration], |u| from u_of(t) on joint 0
 RunLog memory_log(double duration, double dt, const std::function<double(double)>& u_of) {
   RunLog log;
@@ -589,6 +608,92 @@ TEST_F(RenderTest, UEnvelopeStopsWhereTheLogTurnsNonFinite) {
   ASSERT_FALSE(curve.empty());
   EXPECT_LT(curve.back()[0], 0.5f);
   for (const auto& p : curve) EXPECT_FLOAT_EQ(p[1], 10.0f);
+}
+
+// the overlays go to the first corner the robot leaves free; the plot shrinks or goes
+TEST_F(RenderTest, OverlaysAreMovedOffTheRobot) {
+  constexpr int kW = 1280, kH = 720, kMargin = 9;
+  const OverlayPlaces wanted{{kMargin, kH - kMargin - 170, 500, 170},
+                             {kW - kMargin - 384, kMargin, 384, 200}};
+  const std::array<int, 2> min_plot{240, 120};
+
+  // nothing in the way: the preferred corners
+  const ScreenMask clear(160, 90);
+  const OverlayPlaces same = place_overlays(wanted, min_plot, clear, kW, kH, kMargin);
+  EXPECT_EQ(same.table.left, wanted.table.left);
+  EXPECT_EQ(same.table.bottom, wanted.table.bottom);
+  EXPECT_EQ(same.plot.left, wanted.plot.left);
+  EXPECT_EQ(same.plot.bottom, wanted.plot.bottom);
+
+  // the robot top left and bottom right: table top right, plot bottom left
+  ScreenMask robot(160, 90);
+  robot.mark({-0.7, -0.5, 0.6, 0.9});
+  robot.mark({0.7, 0.8, -0.8, -0.6});
+  const OverlayPlaces moved = place_overlays(wanted, min_plot, robot, kW, kH, kMargin);
+  EXPECT_EQ(moved.table.left, kW - kMargin - 500);
+  EXPECT_EQ(moved.table.bottom, wanted.table.bottom);
+  EXPECT_EQ(moved.plot.left, kMargin);
+  EXPECT_EQ(moved.plot.bottom, kMargin);
+  EXPECT_EQ(moved.plot.width, 384);
+
+  // room only for a smaller plot: it shrinks
+  ScreenMask crowded(160, 90);
+  crowded.mark({-1, 1, -0.35, 0.45});
+  crowded.mark({-0.5, -0.45, -1, 1});
+  crowded.mark({0.45, 0.5, -1, 1});
+  const OverlayPlaces shrunk = place_overlays(wanted, min_plot, crowded, kW, kH, kMargin);
+  EXPECT_GT(shrunk.plot.width, 0);
+  EXPECT_LT(shrunk.plot.width, 384);
+  EXPECT_EQ(crowded.count({2.0 * shrunk.plot.left / kW - 1,
+                           2.0 * (shrunk.plot.left + shrunk.plot.width) / kW - 1,
+                           2.0 * shrunk.plot.bottom / kH - 1,
+                           2.0 * (shrunk.plot.bottom + shrunk.plot.height) / kH - 1}),
+            0);
+
+  // no room at all: the plot goes, the table covers as little as it can
+  ScreenMask full(160, 90);
+  full.mark_all();
+  const OverlayPlaces none = place_overlays(wanted, min_plot, full, kW, kH, kMargin);
+  EXPECT_EQ(none.plot.width, 0);
+  EXPECT_EQ(none.table.width, 500);
+}
+
+// with a model camera that shows the arm where the table would go, the overlay moves: every
+// arm pixel of the video without overlay looks the same with it
+TEST_F(RenderTest, OverlayDoesNotCoverTheArm) {
+  // the arm still, leaning up and left: under the table's corner in the 'side' camera
+  const std::string csv = dir_.file("lean.csv");
+  write_pose_log(csv, {-kPi / 4, 0, 0, 0}, 0.1);
+  // a real run's label makes the table wide enough to reach the arm's tip
+  std::ofstream(dir_.file("lean.json"))
+      << R"({"formulation": "id", "derivatives": "adjoint", "N": 25, "kmax": 10})";
+  const RunLog log = read_run_log(csv);
+  VideoOptions options;
+  options.camera = "fixed:side";
+  const std::string with = dir_.file("with.mp4");
+  const std::string without = dir_.file("without.mp4");
+  render_video(kModel, {log}, options, with);
+  options.overlay = false;
+  render_video(kModel, {log}, options, without);
+
+  const std::vector<unsigned char> a = decode_frame(without, 2);
+  const std::vector<unsigned char> b = decode_frame(with, 2);
+  ASSERT_EQ(a.size(), b.size());
+  mj::ModelPtr m = mj::load_model(kModel);
+  const double link = link_colour(m.get()).h;
+  long arm = 0, covered = 0;
+  for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
+    const Hsv p = to_hsv(a[i] / 255.0, a[i + 1] / 255.0, a[i + 2] / 255.0);
+    if (p.s < kMinSaturation || p.v < kMinValue || hue_distance(p.h, link) > kHueTolerance) {
+      continue;
+    }
+    ++arm;
+    const int diff = std::abs(a[i] - b[i]) + std::abs(a[i + 1] - b[i + 1]) +
+                     std::abs(a[i + 2] - b[i + 2]);
+    if (diff > 90) ++covered;
+  }
+  ASSERT_GE(arm, 400) << "the test needs the arm in view";
+  EXPECT_LE(covered, arm / 50) << covered << " of " << arm << " arm pixels under the overlay";
 }
 
 // ------------------------------------------------------------------------------- progress

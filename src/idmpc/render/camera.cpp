@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/render/scene_dressing.hpp"
 
 namespace idmpc::render {
 namespace {
@@ -16,6 +17,9 @@ constexpr double kAutoElevation = -12;     // degrees: slightly above a planar a
 constexpr double kObliqueAzimuth = 60;     // degrees: spatial motion, seen from the front left
 constexpr double kObliqueElevation = -20;
 constexpr double kFrameMargin = 0.04;      // NDC kept free at the image border and around overlays
+constexpr int kMaxMaskCell = 8;            // pixels per footprint cell side, at most...
+constexpr int kMaskRows = 90;              // ...and at least this many cell rows
+constexpr int kMaxPieces = 16;             // pieces a long geom is cut into for its footprint
 
 bool geom_visible(const mjModel* m, const mjvOption& opt, int g) {
   const int group = m->geom_group[g];
@@ -46,6 +50,100 @@ Vec3 geom_half_extent(const mjModel* m, const mjData* d, int g) {
     for (std::size_t j = 0; j < 3; ++j) half[i] += std::fabs(R[3 * i + j]) * local[j];
   }
   return half;
+}
+
+// MuJoCo's OpenGL view of a scene camera on a viewport of the given aspect (mjr_render's
+// glFrustum and look-at): points to normalized device coordinates
+struct GlView {
+  Vec3 pos, fwd, up, right;
+  double near = 0, center = 0, mid_y = 0, half_w = 1, half_h = 1;
+
+  GlView(const mjvScene& scn, double aspect) {
+    // the two eyes coincide without stereo: their mean
+    const mjvGLCamera& a = scn.camera[0];
+    const mjvGLCamera& b = scn.camera[1];
+    for (std::size_t i = 0; i < 3; ++i) {
+      pos[i] = 0.5 * (a.pos[i] + b.pos[i]);
+      fwd[i] = 0.5 * (a.forward[i] + b.forward[i]);
+      up[i] = 0.5 * (a.up[i] + b.up[i]);
+    }
+    right = {fwd[1] * up[2] - fwd[2] * up[1], fwd[2] * up[0] - fwd[0] * up[2],
+             fwd[0] * up[1] - fwd[1] * up[0]};
+    near = 0.5 * (a.frustum_near + b.frustum_near);
+    center = 0.5 * (a.frustum_center + b.frustum_center);
+    const double bottom = 0.5 * (a.frustum_bottom + b.frustum_bottom);
+    const double top = 0.5 * (a.frustum_top + b.frustum_top);
+    mid_y = 0.5 * (top + bottom);
+    half_h = std::max(0.5 * (top - bottom), 1e-12);
+    half_w = std::max(aspect * half_h, 1e-12);
+  }
+
+  // false for a point on or behind the near plane
+  bool project(const Vec3& p, double& x, double& y) const {
+    const Vec3 rel{p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]};
+    const double depth = rel[0] * fwd[0] + rel[1] * fwd[1] + rel[2] * fwd[2];
+    if (!(depth > near)) return false;
+    const double xe = rel[0] * right[0] + rel[1] * right[1] + rel[2] * right[2];
+    const double ye = rel[0] * up[0] + rel[1] * up[1] + rel[2] * up[2];
+    x = (near * xe / depth - center) / half_w;
+    y = (near * ye / depth - mid_y) / half_h;
+    return true;
+  }
+};
+
+// half-sizes of a scene geom's box in its own frame
+Vec3 scene_geom_half(const mjvGeom& g) {
+  const double s0 = g.size[0], s1 = g.size[1], s2 = g.size[2];
+  switch (g.type) {
+    case mjGEOM_SPHERE: return {s0, s0, s0};
+    case mjGEOM_CAPSULE: return {s0, s1, s2 + s0};
+    case mjGEOM_CYLINDER:
+    case mjGEOM_BOX:
+    case mjGEOM_ELLIPSOID: return {s0, s1, s2};
+    default: {
+      const double r = g.modelrbound > 0 ? g.modelrbound : std::max({s0, s1, s2});
+      return {r, r, r};
+    }
+  }
+}
+
+// marks where a scene geom appears; false when part of it is behind the camera
+bool mark_geom(ScreenMask& mask, const GlView& view, const mjvGeom& g) {
+  // cut the box along its longest side into pieces about as long as it is thick
+  const Vec3 half = scene_geom_half(g);
+  const std::size_t k = static_cast<std::size_t>(std::max_element(half.begin(), half.end()) -
+                                                  half.begin());
+  double thick = 0;
+  for (std::size_t j = 0; j < 3; ++j) {
+    if (j != k) thick = std::max(thick, half[j]);
+  }
+  const int pieces = std::clamp(
+      static_cast<int>(std::ceil(half[k] / std::max(thick, 1e-9 * half[k] + 1e-12))), 1,
+      kMaxPieces);
+  Vec3 piece = half;
+  piece[k] = half[k] / pieces;
+  // each piece: the screen box of its eight corners
+  for (int p = 0; p < pieces; ++p) {
+    Vec3 centre{0, 0, 0};
+    centre[k] = -half[k] + (2 * p + 1) * piece[k];
+    ScreenRegion box{1e300, -1e300, 1e300, -1e300};
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 local{centre[0] + ((c & 1) ? piece[0] : -piece[0]),
+                       centre[1] + ((c & 2) ? piece[1] : -piece[1]),
+                       centre[2] + ((c & 4) ? piece[2] : -piece[2])};
+      Vec3 world;
+      for (std::size_t i = 0; i < 3; ++i) {
+        world[i] = g.pos[i] + g.mat[3 * i] * local[0] + g.mat[3 * i + 1] * local[1] +
+                   g.mat[3 * i + 2] * local[2];
+      }
+      double x = 0, y = 0;
+      if (!view.project(world, x, y)) return false;
+      box = {std::min(box.x_lo, x), std::max(box.x_hi, x), std::min(box.y_lo, y),
+             std::max(box.y_hi, y)};
+    }
+    mask.mark(box);
+  }
+  return true;
 }
 
 }  // namespace
@@ -116,6 +214,33 @@ Motion measure_motion(const mjModel* m, const std::vector<mjData*>& datas,
     motion.visible.extend(m->stat.center, Vec3{e, e, e});
   }
   return motion;
+}
+
+ScreenMask robot_footprint(const mjModel* m, const std::vector<mjData*>& datas,
+                           const std::vector<Replay>& replays, const Schedule& schedule,
+                           const mjvOption& opt, mjvCamera& cam, mjvScene& scn, int width,
+                           int height) {
+  // cells finer than the margin the free camera keeps around the overlays
+  const int cell = std::clamp(height / kMaskRows, 1, kMaxMaskCell);
+  ScreenMask mask((width + cell - 1) / cell, (height + cell - 1) / cell);
+  const double aspect = static_cast<double>(width) / height;
+  // every frame of every run, as MuJoCo places the camera and the geoms
+  for (long k = 0; k < schedule.frames; ++k) {
+    for (std::size_t r = 0; r < replays.size(); ++r) {
+      set_pose(m, datas[r], replays[r], schedule.time(k));
+      mjv_updateScene(m, datas[r], &opt, nullptr, &cam, mjCAT_DYNAMIC, &scn);
+      const GlView view(scn, aspect);
+      for (int i = 0; i < scn.ngeom; ++i) {
+        if (!moving_geom(m, scn.geoms[i])) continue;
+        // a geom reaching behind the camera could be anywhere on the image
+        if (!mark_geom(mask, view, scn.geoms[i])) {
+          mask.mark_all();
+          return mask;
+        }
+      }
+    }
+  }
+  return mask;
 }
 
 std::vector<ScreenRegion> free_regions(const std::vector<ScreenRegion>& overlays) {

@@ -39,6 +39,16 @@ Motion measure_motion(const mjModel* m, const std::vector<mjData*>& datas,
                       const std::vector<Replay>& replays, const Schedule& schedule,
                       const mjvOption& opt);
 
+/// @brief Where the robot's moving geoms appear in the image over the whole video, as MuJoCo
+/// projects them with `cam` (fixed, free or tracking) on a width x height viewport: per frame
+/// and run, the screen box of each geom in pieces about as long as it is thick (a diagonal link
+/// marks a band, not its whole bounding square), on a grid of cells of at most 8 pixels. A geom
+/// reaching behind the camera marks the whole image. `scn` is scratch.
+ScreenMask robot_footprint(const mjModel* m, const std::vector<mjData*>& datas,
+                           const std::vector<Replay>& replays, const Schedule& schedule,
+                           const mjvOption& opt, mjvCamera& cam, mjvScene& scn, int width,
+                           int height);
+
 /// @brief Where the motion may go: the frame minus a margin, beside or above/below each
 /// overlay (normalized device coordinates); one candidate region per combination.
 std::vector<ScreenRegion> free_regions(const std::vector<ScreenRegion>& overlays);

@@ -150,6 +150,55 @@ std::vector<std::array<float, 2>> u_envelope(const RunLog& log, double t0, doubl
   return curve;
 }
 
+OverlayPlaces place_overlays(const OverlayPlaces& wanted, const std::array<int, 2>& min_plot,
+                             const ScreenMask& robot, int width, int height, int margin) {
+  // a w x h rectangle in a corner: 0 top left, 1 top right, 2 bottom left, 3 bottom right
+  auto corner = [&](int c, int w, int h) {
+    const int left = (c % 2 == 0) ? margin : width - margin - w;
+    const int bottom = (c < 2) ? height - margin - h : margin;
+    return mjrRect{left, bottom, w, h};
+  };
+  auto covered = [&](const mjrRect& r) { return robot.count(to_ndc(r, width, height)); };
+  auto apart = [&](const mjrRect& a, const mjrRect& b) {
+    return b.width == 0 || a.left + a.width + margin <= b.left ||
+           b.left + b.width + margin <= a.left || a.bottom + a.height + margin <= b.bottom ||
+           b.bottom + b.height + margin <= a.bottom;
+  };
+  OverlayPlaces places;
+
+  // the table: the first corner clear of the robot, else the one covering least of it
+  if (wanted.table.width > 0) {
+    const mjrRect& t = wanted.table;
+    int best = -1;
+    for (const int c : {0, 1, 2, 3}) {
+      const mjrRect r = corner(c, t.width, t.height);
+      const int cells = covered(r);
+      if (best < 0 || cells < best) {
+        best = cells;
+        places.table = r;
+      }
+      if (cells == 0) break;
+    }
+  }
+  // the plot: the first corner clear of the robot and the table, shrinking if need be
+  if (wanted.plot.width > 0) {
+    const mjrRect& p = wanted.plot;
+    for (const double scale : {1.0, 0.8, 0.65}) {
+      const int w = std::min(p.width, std::max(min_plot[0], static_cast<int>(scale * p.width)));
+      const int h =
+          std::min(p.height, std::max(min_plot[1], static_cast<int>(scale * p.height)));
+      for (const int c : {3, 2, 1, 0}) {
+        const mjrRect r = corner(c, w, h);
+        if (covered(r) == 0 && apart(r, places.table)) {
+          places.plot = r;
+          return places;
+        }
+      }
+    }
+  }
+  return places;
+}
+
 int font_scale_for(int height) {
   if (height < 600) return mjFONTSCALE_100;
   if (height < 1000) return mjFONTSCALE_150;
@@ -171,30 +220,35 @@ RunOverlay::RunOverlay(const std::vector<Replay>& replays, const std::vector<Rgb
                      std::min(kPlotMaxSamples, plot_width(con, options.width)))) {
   // the table top left, sized for its widest frame
   for (long k = 0; k < schedule.frames; ++k) table_.fit(rows_at(schedule.time(k)));
-  const int margin = std::max(4, height_ / 80);
-  table_rect_ = {margin, height_ - margin - table_.height(), table_.width(), table_.height()};
+  margin_ = std::max(4, height_ / 80);
+  const mjrRect table{margin_, height_ - margin_ - table_.height(), table_.width(),
+                      table_.height()};
   // the plot bottom right
   const int plot_w = plot_width(con, width_);
   const int plot_h = plot_height(con, height_);
-  plot_rect_ = {width_ - plot_w - margin, margin, plot_w, plot_h};
+  const mjrRect plot{width_ - plot_w - margin_, margin_, plot_w, plot_h};
+  min_plot_ = {20 * con.charWidth[static_cast<unsigned char>('0')], 7 * con.charHeight};
   // a small video keeps the table and drops the plot rather than stack them
-  show_table_ = options.overlay;
-  show_plot_ = options.overlay && table_.height() + plot_h + 3 * margin <= height_ &&
-               plot_w <= width_ / 2;
+  const bool show_plot = table_.height() + plot_h + 3 * margin_ <= height_ && plot_w <= width_ / 2;
+  if (options.overlay) places_.table = table;
+  if (options.overlay && show_plot) places_.plot = plot;
 }
 
 std::vector<ScreenRegion> RunOverlay::regions() const {
   std::vector<ScreenRegion> overlays;
-  if (show_table_) overlays.push_back(to_ndc(table_rect_, width_, height_));
-  if (show_plot_) overlays.push_back(to_ndc(plot_rect_, width_, height_));
+  if (places_.table.width > 0) overlays.push_back(to_ndc(places_.table, width_, height_));
+  if (places_.plot.width > 0) overlays.push_back(to_ndc(places_.plot, width_, height_));
   return overlays;
 }
 
+void RunOverlay::avoid(const ScreenMask& robot) {
+  places_ = place_overlays(places_, min_plot_, robot, width_, height_, margin_);
+}
+
 void RunOverlay::draw(double t) {
-  if (show_table_) {
-    table_.draw(rows_at(t), table_rect_.left, table_rect_.bottom + table_rect_.height);
-  }
-  if (show_plot_) plot_.draw(plot_rect_, t, con_);
+  const mjrRect& table = places_.table;
+  if (table.width > 0) table_.draw(rows_at(t), table.left, table.bottom + table.height);
+  if (places_.plot.width > 0) plot_.draw(places_.plot, t, con_);
 }
 
 std::vector<Row> RunOverlay::rows_at(double t) const {

@@ -27,13 +27,33 @@ inline constexpr Rgb kSinglePlot = {0.92f, 0.92f, 0.92f};
 std::vector<std::array<float, 2>> u_envelope(const RunLog& log, double t0, double t1,
                                              int columns);
 
+/// @brief Where the overlays go: pixel rectangles from the bottom left; width 0 = not shown.
+struct OverlayPlaces {
+  mjrRect table{0, 0, 0, 0};
+  mjrRect plot{0, 0, 0, 0};
+};
+
+/// @brief Moves the overlays off the robot.
+///
+/// Each overlay goes to the first place, in order of preference, whose rectangle touches no
+/// marked cell of `robot`: the table to a corner (top left, top right,
+/// bottom left, bottom right), then the plot, clear of the table, to a corner (bottom right,
+/// bottom left, top right, top left) at its size, then at 80 % and 65 % of it (not below
+/// `min_plot`, width x height). A plot with no free place is dropped; a table with none goes to
+/// the corner where it covers the least of the robot.
+/// @param wanted the preferred places and full sizes (width 0: not shown)
+/// @param width, height the frame in pixels; margin the gap kept to the border and between
+/// the overlays
+OverlayPlaces place_overlays(const OverlayPlaces& wanted, const std::array<int, 2>& min_plot,
+                             const ScreenMask& robot, int width, int height, int margin);
+
 /// @brief MuJoCo font scale for a video height (MuJoCo 2.2 renders mjFONTSCALE_50 as 100:
 /// 100 is the smallest).
 int font_scale_for(int height);
 
 /// @brief The table and the |u| plot of one run (or two in compare mode, with a colour legend),
 /// sized for the widest frame so the panels keep still: the table top left, the plot bottom
-/// right, dropped on a video too small to hold both.
+/// right, dropped on a video too small to hold both; avoid() moves them off the robot.
 class RunOverlay {
  public:
   /// @param replays the runs, in the order of `colours` (kept by reference)
@@ -44,6 +64,12 @@ class RunOverlay {
 
   /// @brief The rectangles the shown overlays cover, in normalized device coordinates.
   std::vector<ScreenRegion> regions() const;
+
+  /// @brief Moves the overlays off the robot's footprint (place_overlays).
+  void avoid(const ScreenMask& robot);
+
+  /// @brief Where the overlays are.
+  const OverlayPlaces& places() const { return places_; }
 
   /// @brief Draws the shown overlays for time t over the current framebuffer.
   void draw(double t);
@@ -58,10 +84,9 @@ class RunOverlay {
   const mjrContext& con_;
   TableLayout table_;
   TimePlot plot_;
-  mjrRect table_rect_{0, 0, 0, 0};
-  mjrRect plot_rect_{0, 0, 0, 0};
-  bool show_table_ = false;
-  bool show_plot_ = false;
+  OverlayPlaces places_;
+  std::array<int, 2> min_plot_{0, 0};
+  int margin_ = 0;
 };
 
 }  // namespace idmpc::render

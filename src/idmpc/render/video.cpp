@@ -166,20 +166,26 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   }
   const mjrRect viewport{0, 0, options.width, options.height};
 
-  // overlays, and the camera framing the motion beside them
+  Scene scene(m, static_cast<int>(replays.size()) * m->ngeom + 1200);
+  mjvScene& scn = scene.scn;
+
+  // overlays, the camera framing the motion beside them, then the overlays moved off the
+  // robot wherever this camera shows it
   RunOverlay overlay(replays, colours, schedule, options, con);
   FreeCamera free_cam;
   mjvCamera cam = make_camera(m, camera_spec, fixed_camid, motion, free_regions(overlay.regions()),
                               static_cast<double>(options.width) / options.height, free_cam);
   Vec3 view_forward, view_up, view_right;
   camera_axes(free_cam.azimuth, free_cam.elevation, view_forward, view_up, view_right);
+  if (options.overlay) {
+    overlay.avoid(robot_footprint(m, datas, replays, schedule, opt, cam, scn, options.width,
+                                  options.height));
+  }
 
   // scene dressing where the model has none
   const bool dress_floor = !has_plane(m);
   const bool dress_light = m->nlight == 0;
   const bool dress_sky = !has_skybox(m);
-  Scene scene(m, static_cast<int>(replays.size()) * m->ngeom + 1200);
-  mjvScene& scn = scene.scn;
 
   VideoWriter writer(out_mp4, options.width, options.height, options.fps);
   const std::size_t row_bytes = static_cast<std::size_t>(options.width) * 3;
