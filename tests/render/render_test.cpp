@@ -540,8 +540,9 @@ TEST_F(RenderTest, DivergedRunHoldsItsLastPose) {
   EXPECT_GE(count_hue(last, link_colour(m.get()).h), 40) << "the arm vanished after divergence";
 }
 
-// a compare video keeps static world geometry in its own colours: here a green pedestal in a
-// body welded to the world (MuJoCo 2.2 files such bodies as dynamic)
+// a compare video keeps static world geometry in its own colours: a green pedestal welded to
+// the world and a purple target on a mocap body (MuJoCo files mocap bodies as dynamic), neither
+// moved by the logs
 TEST_F(RenderTest, CompareVideoLeavesStaticGeometryUntinted) {
   std::ifstream in(kModel);
   std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -549,7 +550,9 @@ TEST_F(RenderTest, CompareVideoLeavesStaticGeometryUntinted) {
   ASSERT_NE(xml.find(arm), std::string::npos);
   xml.insert(xml.find(arm),
              "<body name=\"pedestal\" pos=\"1.2 0 3.4\"><geom name=\"pedestal\" type=\"box\" "
-             "size=\"0.4 0.4 0.4\" rgba=\"0.1 0.8 0.2 1\"/></body>\n    ");
+             "size=\"0.4 0.4 0.4\" rgba=\"0.1 0.8 0.2 1\"/></body>\n    "
+             "<body name=\"target\" mocap=\"true\" pos=\"1.2 0 6.2\"><geom name=\"target\" "
+             "type=\"sphere\" size=\"0.4\" rgba=\"0.7 0.2 0.95 1\"/></body>\n    ");
   const std::string model = dir_.file("pedestal.xml");
   std::ofstream(model) << xml;
 
@@ -564,6 +567,7 @@ TEST_F(RenderTest, CompareVideoLeavesStaticGeometryUntinted) {
   const std::vector<unsigned char> rgb = decode_frame(out, 4);
   ASSERT_EQ(rgb.size(), static_cast<std::size_t>(kWidth * kHeight * 3));
   EXPECT_GE(count_hue(rgb, to_hsv(0.1, 0.8, 0.2).h), 40) << "the static pedestal was recoloured";
+  EXPECT_GE(count_hue(rgb, to_hsv(0.7, 0.2, 0.95).h), 40) << "the mocap target was recoloured";
   EXPECT_GE(count_hue(rgb, to_hsv(0.18, 0.48, 1.0).h), 40) << "no blue (first) arm";
   EXPECT_GE(count_hue(rgb, to_hsv(1.0, 0.52, 0.08).h), 40) << "no orange (second) arm";
 }

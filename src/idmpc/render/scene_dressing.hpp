@@ -18,11 +18,11 @@ inline constexpr Rgb kOrange = {1.00f, 0.52f, 0.08f};
 
 /// @brief Whether a scene geom belongs to one of the robot's moving bodies (a body with a joint
 /// between it and the world). Static world geometry is not: the world body's geoms and those of
-/// bodies welded to the world (a base, a table, a mocap body), whatever their MuJoCo category.
+/// bodies no joint moves (a base, a table, a mocap target), whatever their MuJoCo category.
 bool moving_geom(const mjModel* m, const mjvGeom& g);
 
-/// @brief Removes the model geoms of static bodies from scene geoms `from` on (a second run
-/// adds only its moving bodies; MuJoCo 2.2 counts bodies welded to the world as dynamic).
+/// @brief Removes the model geoms of static bodies from scene geoms `from` on: a second run
+/// adds only its moving bodies (MuJoCo's dynamic category also holds mocap bodies).
 void keep_moving_geoms(mjvScene& scn, const mjModel* m, int from);
 
 /// @brief Whether the model has a ground plane.
