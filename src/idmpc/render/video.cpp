@@ -134,6 +134,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   // the frames' times; a video too long is refused here
   const Schedule schedule = make_schedule(replays, options);
 
+  // the model; the logs, the camera name and the output checked against it
   mj::ModelPtr model = mj::load_model(model_path);
   mjModel* m = model.get();
   for (const RunLog& run : runs) check_run_log(run, m, model_path);
@@ -144,6 +145,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
     throw std::runtime_error("ffmpeg not found on PATH: install the Debian package ffmpeg");
   }
 
+  // one mjData per run; where the motion goes over the whole video
   std::vector<mj::DataPtr> data_owner;
   std::vector<mjData*> datas;
   for (std::size_t r = 0; r < replays.size(); ++r) {
@@ -166,6 +168,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   }
   const mjrRect viewport{0, 0, options.width, options.height};
 
+  // the abstract scene: every run's geoms and the dressing
   Scene scene(m, static_cast<int>(replays.size()) * m->ngeom + 1200);
   mjvScene& scn = scene.scn;
 
@@ -187,6 +190,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   const bool dress_light = m->nlight == 0;
   const bool dress_sky = !has_skybox(m);
 
+  // the encoder and the read-back buffers
   VideoWriter writer(out_mp4, options.width, options.height, options.fps);
   const std::size_t row_bytes = static_cast<std::size_t>(options.width) * 3;
   std::vector<unsigned char> pixels(row_bytes * static_cast<std::size_t>(options.height));
