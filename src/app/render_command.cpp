@@ -1,7 +1,4 @@
 // idmpc render MODEL --log RUN.csv --out RUN.mp4: replays closed-loop logs off-screen to MP4.
-#include <unistd.h>
-
-#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -11,6 +8,7 @@
 #include "app/commands.hpp"
 
 #ifdef IDMPC_HAVE_RENDER
+#include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/run_log.hpp"
 #include "idmpc/render/video.hpp"
 #include "idmpc/render/video_writer.hpp"
@@ -33,30 +31,6 @@ struct RenderArgs {
 };
 
 #ifdef IDMPC_HAVE_RENDER
-
-// "rendering x.mp4: 42%" on stderr; redrawn in place on a terminal, every 10% otherwise
-class ProgressPrinter {
- public:
-  explicit ProgressPrinter(std::string what) : what_(std::move(what)), tty_(isatty(2) != 0) {}
-  void operator()(double fraction) {
-    const int percent = static_cast<int>(fraction * 100 + 1e-9);
-    const int step = tty_ ? 1 : 10;
-    if (percent / step == last_ / step) return;
-    last_ = percent;
-    if (tty_) {
-      std::fprintf(stderr, "\rrendering %s: %3d%%", what_.c_str(), percent);
-      if (percent >= 100) std::fprintf(stderr, "\n");
-    } else {
-      std::fprintf(stderr, "rendering %s: %d%%\n", what_.c_str(), percent);
-    }
-    std::fflush(stderr);
-  }
-
- private:
-  std::string what_;
-  bool tty_;
-  int last_ = -1;
-};
 
 void run_render(const RenderArgs& args) {
   // exactly one source of runs
@@ -86,7 +60,8 @@ void run_render(const RenderArgs& args) {
     for (const auto& path : args.compare) runs.push_back(render::read_run_log(path));
   }
 
-  ProgressPrinter printer(args.out);
+  // "rendering x.mp4: 42%" on stderr: in place on a terminal, every 10% otherwise
+  render::ProgressPrinter printer("rendering " + args.out);
   render::render_video(args.model, runs, options, args.out,
                        [&printer](double f) { printer(f); });
   std::cout << "wrote " << args.out << " (" << options.width << "x" << options.height << ", "

@@ -2,10 +2,13 @@
 // with ffprobe and by decoding frames back to pixels.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -13,14 +16,20 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <iterator>
+#include <limits>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/render/framing.hpp"
 #include "idmpc/render/gl_context.hpp"
+#include "idmpc/render/overlay.hpp"
+#include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/run_log.hpp"
+#include "idmpc/render/run_overlay.hpp"
 #include "idmpc/render/video.hpp"
 #include "idmpc/render/video_writer.hpp"
 
@@ -86,6 +95,45 @@ void write_log(const std::string& path, int n, double duration, double lag = 0,
     for (int i = 0; i < n; ++i) out << ',' << 20 * std::sin(kPi * t / duration) / (i + 1);
     out << ',' << 1e-3 * std::exp(-t) << ',' << 0.5 + 0.1 * std::sin(7 * t) << '\n';
   }
+}
+
+// a log holding one pose (the arm still) for `duration` seconds
+void write_pose_log(const std::string& path, const std::vector<double>& q, double duration,
+                    double dt = 1e-2) {
+  std::ofstream out(path);
+  const std::size_t n = q.size();
+  out << std::setprecision(12) << "t";
+  for (const char* p : {"q", "v", "u"}) {
+    for (std::size_t i = 0; i < n; ++i) out << ',' << p << i;
+  }
+  out << ",residual,update_ms\n";
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  for (int k = 0; k <= steps; ++k) {
+    out << k * dt;
+    for (double qi : q) out << ',' << qi;
+    for (std::size_t i = 0; i < 2 * n; ++i) out << ',' << 0.0;
+    out << ",1e-4,0.5\n";
+  }
+}
+
+// a 4-joint log in memory: rows every dt over [0, duration], |u| from u_of(t) on joint 0
+RunLog memory_log(double duration, double dt, const std::function<double(double)>& u_of) {
+  RunLog log;
+  log.path = "memory.csv";
+  log.label = "memory";
+  log.n = 4;
+  log.nu = 4;
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * dt;
+    log.t.push_back(t);
+    for (int i = 0; i < 4; ++i) log.q.push_back(0.0);
+    log.u.push_back(u_of(t));
+    for (int i = 1; i < 4; ++i) log.u.push_back(0.0);
+    log.residual.push_back(1e-4);
+    log.update_ms.push_back(0.5);
+  }
+  return log;
 }
 
 struct CommandResult {
@@ -313,6 +361,29 @@ TEST_F(RenderTest, UnwritableOutputIsRejectedBeforeRendering) {
   }
 }
 
+// a 2-row log spanning 33000 s would be 990001 frames: refused before anything is rendered
+TEST_F(RenderTest, AbsurdVideoLengthIsRefusedUpFront) {
+  const std::string csv = dir_.file("long.csv");
+  std::ofstream(csv) << "t,q0,q1,q2,q3,v0,v1,v2,v3,u0,u1,u2,u3,residual,update_ms\n"
+                     << "0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n"
+                     << "33000,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n";
+  const RunLog log = read_run_log(csv);
+  const std::string out = dir_.file("long.mp4");
+  VideoOptions options;  // 30 fps, 1 h of video at most: 108000 frames
+  const std::string msg = message_of<std::invalid_argument>([&] {
+    render_video(kModel, {log}, options, out,
+                 [](double) { throw std::runtime_error("the render started"); });
+  });
+  EXPECT_NE(msg.find("990001 frames"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("108000"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("3600 s of video"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_EQ(video_frame_count(1.0, options), 31);
+  EXPECT_THROW(video_frame_count(33000, options), std::invalid_argument);
+  options.max_video_seconds = 0;
+  EXPECT_THROW(check_video_options(options), std::invalid_argument);
+}
+
 TEST_F(RenderTest, BadOptionsAreRejected) {
   const std::string csv = dir_.file("run.csv");
   write_log(csv, 4, 0.2);
@@ -480,7 +551,256 @@ TEST_F(RenderTest, DivergedRunHoldsItsLastPose) {
   EXPECT_GE(count_hue(last, link_colour(m.get()).h), 40) << "the arm vanished after divergence";
 }
 
+// a compare video keeps static world geometry in its own colours: a green pedestal welded to
+// the world and a purple target on a mocap body (MuJoCo files mocap bodies as dynamic), neither
+// moved by the logs
+TEST_F(RenderTest, CompareVideoLeavesStaticGeometryUntinted) {
+  std::ifstream in(kModel);
+  std::string xml((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string arm = "<body name=\"link0\"";
+  ASSERT_NE(xml.find(arm), std::string::npos);
+  xml.insert(xml.find(arm),
+             "<body name=\"pedestal\" pos=\"1.2 0 3.4\"><geom name=\"pedestal\" type=\"box\" "
+             "size=\"0.4 0.4 0.4\" rgba=\"0.1 0.8 0.2 1\"/></body>\n    "
+             "<body name=\"target\" mocap=\"true\" pos=\"1.2 0 6.2\"><geom name=\"target\" "
+             "type=\"sphere\" size=\"0.4\" rgba=\"0.7 0.2 0.95 1\"/></body>\n    ");
+  const std::string model = dir_.file("pedestal.xml");
+  std::ofstream(model) << xml;
+
+  const std::string a = dir_.file("fd.csv");
+  const std::string b = dir_.file("id.csv");
+  write_log(a, 4, 0.3);
+  write_log(b, 4, 0.3, 0.1);
+  const std::string out = dir_.file("compare.mp4");
+  VideoOptions options = small_options();
+  options.overlay = false;
+  render_video(model, {read_run_log(a), read_run_log(b)}, options, out);
+  const std::vector<unsigned char> rgb = decode_frame(out, 4);
+  ASSERT_EQ(rgb.size(), static_cast<std::size_t>(kWidth * kHeight * 3));
+  EXPECT_GE(count_hue(rgb, to_hsv(0.1, 0.8, 0.2).h), 40) << "the static pedestal was recoloured";
+  EXPECT_GE(count_hue(rgb, to_hsv(0.7, 0.2, 0.95).h), 40) << "the mocap target was recoloured";
+  EXPECT_GE(count_hue(rgb, to_hsv(0.18, 0.48, 1.0).h), 40) << "no blue (first) arm";
+  EXPECT_GE(count_hue(rgb, to_hsv(1.0, 0.52, 0.08).h), 40) << "no orange (second) arm";
+}
+
+// ------------------------------------------------------------------------------- overlay
+
+// |u| with a 3 ms spike of 235 N m in 2 s at 1 ms rows: the plot at 1280 x 720 (384 pixels
+// wide) must show the spike at its full height
+TEST_F(RenderTest, UPlotShowsShortPeaksAtFullHeight) {
+  constexpr double kSpike = 235;
+  const RunLog log = memory_log(2.0, 1e-3, [](double t) {
+    return (t > 0.4995 && t < 0.5025) ? kSpike : 50.0;
+  });
+  const auto curve = u_envelope(log, 0.0, 2.0, 384);
+  ASSERT_FALSE(curve.empty());
+  float peak = 0;
+  for (const auto& p : curve) peak = std::max(peak, p[1]);
+  EXPECT_FLOAT_EQ(peak, kSpike);
+  EXPECT_LE(curve.size(), 384u);
+
+  // the plot's value axis reaches the spike
+  TimePlot plot("|u| [N m]", 0.0, 2.0, {PlotCurve{curve, {1, 1, 1}, false}});
+  EXPECT_GE(plot.value_top(), kSpike);
+
+  // a curve thinned to the plot's sample limit keeps its peak too
+  std::vector<std::array<float, 2>> raw;
+  for (std::size_t i = 0; i < log.rows(); ++i) {
+    raw.push_back({static_cast<float>(log.t[i]), static_cast<float>(log.u_norm(i))});
+  }
+  TimePlot thinned("|u| [N m]", 0.0, 2.0, {PlotCurve{raw, {1, 1, 1}, false}});
+  ASSERT_LE(thinned.curves()[0].points.size(), static_cast<std::size_t>(kPlotMaxSamples));
+  float thinned_peak = 0;
+  for (const auto& p : thinned.curves()[0].points) thinned_peak = std::max(thinned_peak, p[1]);
+  EXPECT_FLOAT_EQ(thinned_peak, kSpike);
+}
+
+TEST_F(RenderTest, UEnvelopeStopsWhereTheLogTurnsNonFinite) {
+  const RunLog log = memory_log(1.0, 1e-2, [](double t) {
+    return t < 0.5 ? 10.0 : std::numeric_limits<double>::quiet_NaN();
+  });
+  const auto curve = u_envelope(log, 0.0, 1.0, 100);
+  ASSERT_FALSE(curve.empty());
+  EXPECT_LT(curve.back()[0], 0.5f);
+  for (const auto& p : curve) EXPECT_FLOAT_EQ(p[1], 10.0f);
+}
+
+// the overlays go to the first corner the robot leaves free; the plot shrinks or goes
+TEST_F(RenderTest, OverlaysAreMovedOffTheRobot) {
+  constexpr int kW = 1280, kH = 720, kMargin = 9;
+  const OverlayPlaces wanted{{kMargin, kH - kMargin - 170, 500, 170},
+                             {kW - kMargin - 384, kMargin, 384, 200}};
+  const std::array<int, 2> min_plot{240, 120};
+
+  // nothing in the way: the preferred corners
+  const ScreenMask clear(160, 90);
+  const OverlayPlaces same = place_overlays(wanted, min_plot, clear, kW, kH, kMargin);
+  EXPECT_EQ(same.table.left, wanted.table.left);
+  EXPECT_EQ(same.table.bottom, wanted.table.bottom);
+  EXPECT_EQ(same.plot.left, wanted.plot.left);
+  EXPECT_EQ(same.plot.bottom, wanted.plot.bottom);
+
+  // the robot top left and bottom right: table top right, plot bottom left
+  ScreenMask robot(160, 90);
+  robot.mark({-0.7, -0.5, 0.6, 0.9});
+  robot.mark({0.7, 0.8, -0.8, -0.6});
+  const OverlayPlaces moved = place_overlays(wanted, min_plot, robot, kW, kH, kMargin);
+  EXPECT_EQ(moved.table.left, kW - kMargin - 500);
+  EXPECT_EQ(moved.table.bottom, wanted.table.bottom);
+  EXPECT_EQ(moved.plot.left, kMargin);
+  EXPECT_EQ(moved.plot.bottom, kMargin);
+  EXPECT_EQ(moved.plot.width, 384);
+
+  // room only for a smaller plot: it shrinks
+  ScreenMask crowded(160, 90);
+  crowded.mark({-1, 1, -0.35, 0.45});
+  crowded.mark({-0.5, -0.45, -1, 1});
+  crowded.mark({0.45, 0.5, -1, 1});
+  const OverlayPlaces shrunk = place_overlays(wanted, min_plot, crowded, kW, kH, kMargin);
+  EXPECT_GT(shrunk.plot.width, 0);
+  EXPECT_LT(shrunk.plot.width, 384);
+  EXPECT_EQ(crowded.count({2.0 * shrunk.plot.left / kW - 1,
+                           2.0 * (shrunk.plot.left + shrunk.plot.width) / kW - 1,
+                           2.0 * shrunk.plot.bottom / kH - 1,
+                           2.0 * (shrunk.plot.bottom + shrunk.plot.height) / kH - 1}),
+            0);
+
+  // no room at all: the plot goes, the table covers as little as it can
+  ScreenMask full(160, 90);
+  full.mark_all();
+  const OverlayPlaces none = place_overlays(wanted, min_plot, full, kW, kH, kMargin);
+  EXPECT_EQ(none.plot.width, 0);
+  EXPECT_EQ(none.table.width, 500);
+}
+
+// with a model camera that shows the arm where the table would go, the overlay moves: every
+// arm pixel of the video without overlay looks the same with it
+TEST_F(RenderTest, OverlayDoesNotCoverTheArm) {
+  // the arm still, leaning up and left: under the table's corner in the 'side' camera
+  const std::string csv = dir_.file("lean.csv");
+  write_pose_log(csv, {-kPi / 4, 0, 0, 0}, 0.1);
+  // a real run's label makes the table wide enough to reach the arm's tip
+  std::ofstream(dir_.file("lean.json"))
+      << R"({"formulation": "id", "derivatives": "adjoint", "N": 25, "kmax": 10})";
+  const RunLog log = read_run_log(csv);
+  VideoOptions options;
+  options.camera = "fixed:side";
+  const std::string with = dir_.file("with.mp4");
+  const std::string without = dir_.file("without.mp4");
+  render_video(kModel, {log}, options, with);
+  options.overlay = false;
+  render_video(kModel, {log}, options, without);
+
+  const std::vector<unsigned char> a = decode_frame(without, 2);
+  const std::vector<unsigned char> b = decode_frame(with, 2);
+  ASSERT_EQ(a.size(), b.size());
+  mj::ModelPtr m = mj::load_model(kModel);
+  const double link = link_colour(m.get()).h;
+  long arm = 0, covered = 0;
+  for (std::size_t i = 0; i + 2 < a.size(); i += 3) {
+    const Hsv p = to_hsv(a[i] / 255.0, a[i + 1] / 255.0, a[i + 2] / 255.0);
+    if (p.s < kMinSaturation || p.v < kMinValue || hue_distance(p.h, link) > kHueTolerance) {
+      continue;
+    }
+    ++arm;
+    const int diff = std::abs(a[i] - b[i]) + std::abs(a[i + 1] - b[i + 1]) +
+                     std::abs(a[i + 2] - b[i + 2]);
+    if (diff > 90) ++covered;
+  }
+  ASSERT_GE(arm, 400) << "the test needs the arm in view";
+  EXPECT_LE(covered, arm / 50) << covered << " of " << arm << " arm pixels under the overlay";
+}
+
+// ------------------------------------------------------------------------------- progress
+
+std::string read_all(std::FILE* f) {
+  std::rewind(f);
+  std::string text;
+  char buffer[4096];
+  std::size_t n = 0;
+  while ((n = std::fread(buffer, 1, sizeof(buffer), f)) > 0) text.append(buffer, n);
+  return text;
+}
+
+// off a terminal (a file, a pipe, a CI log): ten plain lines, no carriage returns
+TEST(ProgressPrinterTest, PrintsPlainLinesOffATerminal) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer("rendering x.mp4", f);
+    EXPECT_FALSE(printer.terminal());
+    for (int k = 1; k <= 31; ++k) printer(k / 31.0);
+  }
+  const std::string text = read_all(f);
+  std::fclose(f);
+  EXPECT_EQ(text.find('\r'), std::string::npos) << text;
+  std::string expected;
+  for (int p = 10; p <= 100; p += 10) expected += "rendering x.mp4: " + std::to_string(p) + "%\n";
+  EXPECT_EQ(text, expected);
+}
+
+// on a terminal: redrawn in place, one newline at the end (or when interrupted)
+TEST(ProgressPrinterTest, RedrawsInPlaceOnATerminal) {
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  {
+    ProgressPrinter printer("rendering", f, true);
+    for (int k = 1; k <= 4; ++k) printer(k / 4.0);
+  }
+  {
+    ProgressPrinter interrupted("rendering", f, true);
+    interrupted(0.5);
+  }
+  const std::string text = read_all(f);
+  std::fclose(f);
+  EXPECT_EQ(text, "\rrendering:  25%\rrendering:  50%\rrendering:  75%\rrendering: 100%\n"
+                  "\rrendering:  50%\n");
+}
+
+// a real terminal is told from isatty
+TEST(ProgressPrinterTest, TellsATerminal) {
+  const int master = posix_openpt(O_RDWR | O_NOCTTY);
+  if (master < 0 || grantpt(master) != 0 || unlockpt(master) != 0) {
+    if (master >= 0) close(master);
+    GTEST_SKIP() << "no pseudo-terminal available";
+  }
+  std::FILE* tty = std::fopen(ptsname(master), "w");
+  ASSERT_NE(tty, nullptr);
+  {
+    ProgressPrinter printer("rendering", tty);
+    EXPECT_TRUE(printer.terminal());
+    printer(1.0);
+  }
+  std::fclose(tty);
+  std::string text;
+  pollfd p{master, POLLIN, 0};
+  char buffer[256];
+  while (poll(&p, 1, 200) > 0 && (p.revents & POLLIN)) {
+    const ssize_t n = read(master, buffer, sizeof(buffer));
+    if (n <= 0) break;
+    text.append(buffer, static_cast<std::size_t>(n));
+  }
+  close(master);
+  EXPECT_NE(text.find("\rrendering: 100%"), std::string::npos) << text;
+}
+
 // ------------------------------------------------------------------------------- command line
+
+// stderr to a file: plain progress lines, no carriage returns
+TEST_F(RenderTest, CommandLineProgressInALogHasNoCarriageReturns) {
+  const std::string csv = dir_.file("cli.csv");
+  write_log(csv, 4, 0.3);
+  const std::string out = dir_.file("cli.mp4");
+  const std::string err = dir_.file("stderr.txt");
+  const CommandResult ok = run(std::string("'") + IDMPC_BINARY + "' render '" + kModel +
+                               "' --log '" + csv + "' --out '" + out +
+                               "' --width 320 --height 240 2>'" + err + "'");
+  ASSERT_EQ(ok.status, 0);
+  std::ifstream in(err);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text.find('\r'), std::string::npos) << text;
+  EXPECT_NE(text.find("rendering " + out + ": 100%\n"), std::string::npos) << text;
+}
 
 TEST_F(RenderTest, CommandLineRendersAndReportsErrors) {
   const std::string csv = dir_.file("cli.csv");

@@ -68,6 +68,48 @@ double Bounds::size() const {
   return std::max({e[0], e[1], e[2]});
 }
 
+ScreenMask::ScreenMask(int columns, int rows)
+    : columns_(std::max(columns, 1)),
+      rows_(std::max(rows, 1)),
+      cells_(static_cast<std::size_t>(columns_) * static_cast<std::size_t>(rows_), 0) {}
+
+bool ScreenMask::cell_range(const ScreenRegion& r, int& c0, int& c1, int& r0, int& r1) const {
+  if (!(r.x_lo < 1 && r.x_hi > -1 && r.y_lo < 1 && r.y_hi > -1)) return false;
+  // [-1, 1] -> cells; a region touches every cell it overlaps with positive area (a point
+  // region touches the cell it is in)
+  auto range = [](double lo, double hi, int cells, int& first, int& end) {
+    first = std::clamp(static_cast<int>(std::floor(0.5 * (lo + 1) * cells)), 0, cells - 1);
+    end = std::clamp(static_cast<int>(std::ceil(0.5 * (hi + 1) * cells)), first + 1, cells);
+  };
+  range(r.x_lo, r.x_hi, columns_, c0, c1);
+  range(r.y_lo, r.y_hi, rows_, r0, r1);
+  return true;
+}
+
+void ScreenMask::mark(const ScreenRegion& r) {
+  int c0, c1, r0, r1;
+  if (!cell_range(r, c0, c1, r0, r1)) return;
+  for (int y = r0; y < r1; ++y) {
+    std::fill_n(cells_.begin() + static_cast<std::ptrdiff_t>(y) * columns_ + c0, c1 - c0, 1);
+  }
+}
+
+void ScreenMask::mark_all() { std::fill(cells_.begin(), cells_.end(), 1); }
+
+int ScreenMask::count(const ScreenRegion& r) const {
+  int c0, c1, r0, r1;
+  if (!cell_range(r, c0, c1, r0, r1)) return 0;
+  int n = 0;
+  for (int y = r0; y < r1; ++y) {
+    for (int x = c0; x < c1; ++x) n += cells_[static_cast<std::size_t>(y * columns_ + x)];
+  }
+  return n;
+}
+
+int ScreenMask::count() const {
+  return static_cast<int>(std::count(cells_.begin(), cells_.end(), 1));
+}
+
 void camera_axes(double azimuth, double elevation, Vec3& forward, Vec3& up, Vec3& right) {
   const double ca = azimuth * kPi / 180;
   const double ce = elevation * kPi / 180;

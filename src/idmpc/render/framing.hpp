@@ -34,6 +34,32 @@ struct ScreenRegion {
   double height() const { return y_hi - y_lo; }
 };
 
+/// @brief Where something appears in the image: a grid of cells over normalized device
+/// coordinates, each marked once anything touched it.
+class ScreenMask {
+ public:
+  /// @brief An unmarked columns x rows grid (each at least 1).
+  ScreenMask(int columns, int rows);
+  /// @brief Marks every cell the region touches (its part inside the image).
+  void mark(const ScreenRegion& r);
+  /// @brief Marks every cell.
+  void mark_all();
+  /// @brief Number of marked cells the region touches.
+  int count(const ScreenRegion& r) const;
+  /// @brief Number of marked cells.
+  int count() const;
+  int columns() const { return columns_; }
+  int rows() const { return rows_; }
+
+ private:
+  // the cells [c0, c1) x [r0, r1) a region touches; false when it misses the image
+  bool cell_range(const ScreenRegion& r, int& c0, int& c1, int& r0, int& r1) const;
+
+  int columns_ = 1;
+  int rows_ = 1;
+  std::vector<unsigned char> cells_;  // row-major, row 0 at the bottom (y = -1)
+};
+
 /// @brief A MuJoCo free camera (mjvCamera with type mjCAMERA_FREE).
 struct FreeCamera {
   Vec3 lookat{0, 0, 0};

@@ -103,14 +103,19 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1, std::vector<P
     throw std::invalid_argument("TimePlot: expected at most " + std::to_string(mjMAXLINE) +
                                 " curves, got " + std::to_string(curves_.size()));
   }
-  // curves are drawn as line segments (two points each): at most mjMAXLINEPNT / 2 samples
-  const std::size_t max_samples = static_cast<std::size_t>(mjMAXLINEPNT) / 2;
+  // curves are drawn as line segments (two points each): at most kPlotMaxSamples samples, each
+  // the largest of its run of consecutive points
+  const auto max_samples = static_cast<std::size_t>(kPlotMaxSamples);
   for (auto& curve : curves_) {
     auto& points = curve.points;
     if (points.size() <= max_samples) continue;
     std::vector<std::array<float, 2>> thinned;
     for (std::size_t i = 0; i < max_samples; ++i) {
-      thinned.push_back(points[i * (points.size() - 1) / (max_samples - 1)]);
+      const auto n = points.size();
+      const auto from = points.begin() + static_cast<std::ptrdiff_t>(i * n / max_samples);
+      const auto to = points.begin() + static_cast<std::ptrdiff_t>((i + 1) * n / max_samples);
+      thinned.push_back(*std::max_element(
+          from, to, [](const auto& p, const auto& q) { return p[1] < q[1]; }));
     }
     points.swap(thinned);
   }
@@ -147,27 +152,23 @@ TimePlot::TimePlot(const std::string& title, double t0, double t1, std::vector<P
   fig.range[0][1] = static_cast<float>(t0 + x_ticks * x_step);
   fig.gridsize[0] = x_ticks + 1;
 
-  // value axis from 0 to a round value above a high percentile (one spike must not flatten
-  // the curves)
-  std::vector<float> values;
+  // value axis from 0 to a round value above the largest value: a short peak is what a
+  // reader must not miss
+  double largest = 0;
   for (const auto& curve : curves_) {
     for (const auto& p : curve.points) {
-      if (std::isfinite(p[1])) values.push_back(p[1]);
+      if (std::isfinite(p[1])) largest = std::max(largest, static_cast<double>(p[1]));
     }
   }
-  double top = 1;
-  if (!values.empty()) {
-    std::sort(values.begin(), values.end());
-    const auto high = static_cast<std::size_t>(0.995 * static_cast<double>(values.size() - 1));
-    const double p = values[high];
-    if (p > 0) top = 1.05 * p;
-  }
+  const double top = largest > 0 ? 1.05 * largest : 1;
   const double y_step = nice_step(top, 4);
   const int y_ticks = std::max(1, static_cast<int>(std::ceil(top / y_step - 1e-9)));
   fig.range[1][0] = 0;
   fig.range[1][1] = static_cast<float>(y_ticks * y_step);
   fig.gridsize[1] = y_ticks + 1;
 }
+
+float TimePlot::value_top() const { return fig_->range[1][1]; }
 
 void TimePlot::draw(const mjrRect& viewport, double t, const mjrContext& con) {
   mjvFigure& fig = *fig_;

@@ -54,6 +54,9 @@ class TableLayout {
 /// @brief Width in pixels of text in MuJoCo's normal font.
 int text_width(const mjrContext& con, const std::string& text);
 
+/// @brief Most samples a TimePlot curve keeps (it draws segments: two MuJoCo line points each).
+inline constexpr int kPlotMaxSamples = mjMAXLINEPNT / 2;
+
 /// @brief One curve of a TimePlot: samples (t, value) with t increasing.
 struct PlotCurve {
   std::vector<std::array<float, 2>> points;
@@ -62,13 +65,19 @@ struct PlotCurve {
 };
 
 /// @brief A plot of curves over a fixed time axis with a moving time cursor; later curves are
-/// drawn on top of earlier ones.
+/// drawn on top of earlier ones. The value axis runs from 0 to a round value above the largest
+/// value, so a short peak shows at its full height; a curve of more than kPlotMaxSamples points
+/// keeps the largest value of each run of consecutive points.
 class TimePlot {
  public:
   /// @param title e.g. "|u| [N m]"; t0, t1 the time axis; at most mjMAXLINE curves
   TimePlot(const std::string& title, double t0, double t1, std::vector<PlotCurve> curves);
   /// @brief Draws the curves up to time t with a cursor at t into `viewport`.
   void draw(const mjrRect& viewport, double t, const mjrContext& con);
+  /// @brief The top of the value axis.
+  float value_top() const;
+  /// @brief The curves as they are drawn (after thinning).
+  const std::vector<PlotCurve>& curves() const { return curves_; }
 
  private:
   std::unique_ptr<mjvFigure> fig_;  // ~800 kB: on the heap

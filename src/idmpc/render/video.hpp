@@ -22,11 +22,20 @@ struct VideoOptions {
   std::string camera = "auto";
   /// text table (time, run labels, |u|, residual, update time) and |u| plot over the scene
   bool overlay = true;
+  /// longest video accepted, in seconds of video (1 h): a log that would need more than
+  /// fps x this many frames is refused before anything is loaded or rendered
+  double max_video_seconds = 3600;
 };
 
 /// @brief Checks the options; throws std::invalid_argument naming the bad option, the expected
 /// range and the value it got.
 void check_video_options(const VideoOptions& options);
+
+/// @brief Number of frames of a video of `log_seconds` of log: one every speed/fps log seconds,
+/// both ends shown. Throws std::invalid_argument naming the count and the bound when the video
+/// would be longer than options.max_video_seconds (e.g. a 2-row log spanning 33000 s at 30 fps:
+/// 990001 frames, over the 108000 of one hour).
+long video_frame_count(double log_seconds, const VideoOptions& options);
 
 /// @brief Renders the runs replayed in the model to an H.264 MP4 at `out_mp4`.
 ///
@@ -43,7 +52,8 @@ void check_video_options(const VideoOptions& options);
 /// @param model_path MJCF file whose nq equals every log's joint count
 /// @param runs one or two logs from read_run_log
 /// @param progress called after each frame with the fraction of frames done, in (0, 1]
-/// Throws std::invalid_argument for bad options or logs that do not fit the model, and
+/// Throws std::invalid_argument for bad options, logs that do not fit the model or a video
+/// longer than options.max_video_seconds (before any loading or rendering), and
 /// std::runtime_error for an unwritable output, a missing ffmpeg, or a GL/encoding failure;
 /// a failed render leaves no partial file at `out_mp4`.
 void render_video(const std::string& model_path, const std::vector<RunLog>& runs,
