@@ -8,6 +8,7 @@
 #include "app/commands.hpp"
 #include "app/swingup.hpp"
 #ifdef IDMPC_HAVE_RENDER
+#include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/video.hpp"
 #endif
 
@@ -54,10 +55,9 @@ void register_swingup(CLI::App& app) {
       run.formulation = task.formulation;
       run.derivatives = task.derivatives;
       run.label = out.summary.label();
-      render::render_video(task.model, {run}, render::VideoOptions{}, opt->video, [](double frac) {
-        std::fprintf(stderr, "\rrendering %3.0f%%", 100 * frac);
-        if (frac >= 1) std::fprintf(stderr, "\n");
-      });
+      render::ProgressPrinter progress("rendering " + opt->video);
+      render::render_video(task.model, {run}, render::VideoOptions{}, opt->video,
+                           [&progress](double frac) { progress(frac); });
       std::cout << "  video: " << opt->video << "\n";
     }
 #endif
