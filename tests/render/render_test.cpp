@@ -680,8 +680,7 @@ TEST_F(RenderTest, OverlayDoesNotCoverTheArm) {
   const std::string csv = dir_.file("lean.csv");
   write_pose_log(csv, {-kPi / 4, 0, 0, 0}, 0.1);
   // a real run's label makes the table wide enough to reach the arm's tip
-  std::ofstream(dir_.file("lean.json"))
-      << R"({"formulation": "id", "derivatives": "adjoint", "N": 25, "kmax": 10})";
+  std::ofstream(dir_.file("lean.json")) << summary_json("id", "adjoint", 25, 10);
   const RunLog log = read_run_log(csv);
   VideoOptions options;
   options.camera = "fixed:side";
