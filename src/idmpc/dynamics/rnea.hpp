@@ -35,8 +35,8 @@ const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
   // backward pass: joint torques, subtree forces, armature and passive forces
   for (int i = model.n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    data.tau[i] = joint_project<S>(model, i, data.F[i]) + model.armature[i] * a[i] +
-                  model.damping[i] * v[i] + model.stiffness[i] * (q[i] - model.q_spring[i]);
+    data.tau[i] = joint_project<S>(model, i, data.F[i]) +
+                  armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(a[i]));
     if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
   }
   return data.tau;
