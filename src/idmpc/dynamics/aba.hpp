@@ -13,6 +13,10 @@ namespace idmpc {
 template <typename S, typename Q, typename Vv, typename T>
 const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
+  IDMPC_DEBUG_CHECK(data.n == model.n, "aba: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && tau.size() == model.n,
+                    "aba: q, v, tau must have size model.n");
+  data.passes.aba(q, v);
   const int n = model.n;
   // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
   for (int i = 0; i < n; ++i) {
@@ -54,8 +58,13 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
 
 /// @brief y = M(q)⁻¹x in O(n), reusing the articulated inertias of the last aba(q, ·, ·) call
 /// (an ABA sweep with zero velocity and gravity). Returns data.Minv_x.
+/// Precondition: data holds aba at q (checked in debug builds).
 template <typename S, typename Xx>
 const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && x.size() == model.n, "minv_apply: x must have size model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
+                    "minv_apply needs aba(model, data, q, v, tau) first, and no other algorithm at "
+                    "another q since");
   const int n = model.n;
   for (int i = 0; i < n; ++i) data.pz[i].setZero();
   // backward: articulated bias forces of the load x
@@ -80,7 +89,13 @@ const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::Mat
 
 /// @brief data.rhs ← M(q)⁻¹·data.rhs for its first m columns (m ≤ n) in one pair of
 /// sweeps of 6×m blocks, reusing the articulated inertias of the last aba(q, ·, ·) call.
+/// Precondition: data holds aba at q (checked in debug builds).
 template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& data, int m) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && m >= 0 && m <= model.n,
+                    "minv_apply_columns: expected 0 <= m <= model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
+                    "minv_apply_columns needs aba(model, data, q, v, tau) first, and no other "
+                    "algorithm at another q since");
   const int n = model.n;
   auto Y = data.rhs.leftCols(m);
   for (int i = 0; i < n; ++i) data.Pm[i].leftCols(m).setZero();

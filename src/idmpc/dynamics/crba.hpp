@@ -10,6 +10,9 @@ namespace idmpc {
 /// @brief Joint-space inertia M(q) (n×n, symmetric, armature on the diagonal). Returns data.M.
 template <typename S, typename Q>
 const MatX<S>& crba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q) {
+  IDMPC_DEBUG_CHECK(data.n == model.n, "crba: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(q.size() == model.n, "crba: q must have size model.n");
+  data.passes.kinematics(q);
   const int n = model.n;
   for (int i = 0; i < n; ++i) {
     data.X_up[i] = joint_transform<S>(model, i, S(q[i]));

@@ -38,6 +38,10 @@ Mat6<S> coriolis_matrix(const Inertia<S>& I, const Vec6<S>& v, const Vec6<S>& h)
 template <typename S, typename Q, typename Vv, typename Aa>
 void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                       const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  IDMPC_DEBUG_CHECK(data.n == model.n, "rnea_derivatives: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
+                    "rnea_derivatives: q, v, a must have size model.n");
+  data.passes.kinematics(q);
   const int n = model.n;
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass in the world frame: placements, axes, velocities, accelerations, forces

@@ -17,9 +17,15 @@
 namespace idmpc {
 
 /// @brief (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M·w into data.g_q, g_v, g_a. Precondition: data holds
-/// rnea(model, data, q, v, a) at the point of linearization (w of size n).
+/// rnea(model, data, q, v, a) at the point of linearization (w of size n); checked in debug
+/// builds, as far as data can tell: no algorithm since has overwritten rnea's link velocities
+/// and accelerations (aba) or recomputed the kinematics at another q.
 template <typename S, typename W>
 void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& w) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && w.size() == model.n, "rnea_vjp: w must have size model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_rnea(),
+                    "rnea_vjp needs rnea(model, data, q, v, a) at the point of linearization "
+                    "first, and no aba or algorithm at another q since");
   const int n = model.n;
   // adjoint of the backward pass: force adjoints propagate root to leaves like velocities
   for (int i = 0; i < n; ++i) {
