@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <benchmark/benchmark.h>
@@ -21,6 +22,9 @@ namespace idmpc::bench {
 
 /// A MuJoCo model and the controller's Model imported from it.
 struct BenchModel {
+  BenchModel(std::string name_, mj::ModelPtr m_)
+      : name(std::move(name_)), m(std::move(m_)), imported(mj::import_model(m.get(), name)) {}
+
   std::string name;
   mj::ModelPtr m;
   mj::ImportedModel imported;
@@ -49,17 +53,15 @@ inline const BenchModel& bench_model(const std::string& name) {
   auto& slot = cache[name];
   if (!slot) {
     const std::string path = IDMPC_SOURCE_DIR "/mjcf/" + name + ".xml";
-    auto bm = std::make_unique<BenchModel>();
-    bm->name = name;
+    mj::ModelPtr m;
     if (std::ifstream(path).good()) {
-      bm->m = mj::load_model(path);
+      m = mj::load_model(path);
     } else if (name.rfind("chain", 0) == 0) {
-      bm->m = mj::load_model_from_string(generate_chain(std::stoi(name.substr(5))));
+      m = mj::load_model_from_string(generate_chain(std::stoi(name.substr(5))));
     } else {
       throw std::invalid_argument("no model file " + path);
     }
-    bm->imported = mj::import_model(bm->m.get(), name);
-    slot = std::move(bm);
+    slot = std::make_unique<BenchModel>(name, std::move(m));
   }
   return *slot;
 }

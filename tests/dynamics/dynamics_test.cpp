@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <random>
 #include <string>
@@ -86,12 +87,11 @@ struct Loaded {
   Model model;
 };
 
-Loaded load_case(const Case& c) {
-  Loaded out;
-  out.m = c.path.empty() ? mj::load_model_from_string(test::random_tree_mjcf(c.seed))
-                         : mj::load_model(c.path);
-  out.model = mj::import_model(out.m.get(), c.label).model;
-  return out;
+std::unique_ptr<Loaded> load_case(const Case& c) {
+  mj::ModelPtr m = c.path.empty() ? mj::load_model_from_string(test::random_tree_mjcf(c.seed))
+                                  : mj::load_model(c.path);
+  Model model = mj::import_model(m.get(), c.label).model;
+  return std::make_unique<Loaded>(Loaded{std::move(m), std::move(model)});
 }
 
 /// ‖x − y‖∞ / max(scale, 1)
@@ -149,8 +149,8 @@ class DynamicsTest : public ::testing::TestWithParam<Case> {
     EXPECT_TRUE(warnings.empty()) << "MuJoCo warnings:" << joined(warnings);
   }
 
-  const Model& model() const { return loaded_.model; }
-  int n() const { return loaded_.model.n; }
+  const Model& model() const { return loaded_->model; }
+  int n() const { return loaded_->model.n; }
 
   /// random state (q around q_ref, v, a, τ) for sample k of this case
   struct State {
@@ -177,7 +177,7 @@ class DynamicsTest : public ::testing::TestWithParam<Case> {
     return x;
   }
 
-  Loaded loaded_;
+  std::unique_ptr<Loaded> loaded_;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -186,7 +186,7 @@ class DynamicsTest : public ::testing::TestWithParam<Case> {
 TEST_P(DynamicsTest, CheckModelPassesEveryComparison) {
   const Case& c = GetParam();
   const std::vector<mj::CheckEntry> entries =
-      mj::check_model(loaded_.m.get(), model(), c.samples, c.seed);
+      mj::check_model(loaded_->m.get(), model(), c.samples, c.seed);
   ASSERT_FALSE(entries.empty());
   for (const mj::CheckEntry& e : entries) {
     g_worst->record(e, c.label);

@@ -1,14 +1,16 @@
 #include "support/problems.hpp"
 
+#include <utility>
+
 #include "idmpc/experiment/task.hpp"
 #include "idmpc/mujoco/import.hpp"
 
 namespace idmpc::test {
 
 Problem load_problem(const std::string& path) {
-  Problem p{mj::load_model(path), {}};
-  p.model = mj::import_model(p.m.get(), path).model;
-  return p;
+  mj::ModelPtr m = mj::load_model(path);
+  Model model = mj::import_model(m.get(), path).model;
+  return {std::move(m), std::move(model)};
 }
 
 OcpWeights paper_weights(int n, double Qa) {

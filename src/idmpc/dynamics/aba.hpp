@@ -13,12 +13,17 @@ namespace idmpc {
 template <typename S, typename Q, typename Vv, typename T>
 const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
+  IDMPC_DEBUG_CHECK(data.n == model.n, "aba: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && tau.size() == model.n,
+                    "aba: q, v, tau must have size model.n");
+  data.passes.aba(q, v);
   const int n = model.n;
   // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
     data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
-    data.vJ[i] = model.S[i].template cast<S>() * v[i];
+    data.vJ[i].setZero();
+    add_joint_motion(model, i, S(v[i]), data.vJ[i]);
     data.V[i] = p < 0 ? data.vJ[i] : Vec6<S>(data.X_up[i].apply_motion(data.V[p]) + data.vJ[i]);
     data.c[i] = cross_motion<S>(data.V[i], data.vJ[i]);
     const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
@@ -28,11 +33,10 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
   // pass 2: articulated inertias and bias forces, leaves first
   for (int i = n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    const Vec6<S> Si = model.S[i].template cast<S>();
-    data.U[i] = data.IA[i] * Si;
-    data.D[i] = Si.dot(data.U[i]) + model.armature[i];
-    data.u[i] = tau[i] - Si.dot(data.pA[i]) - model.damping[i] * v[i] -
-                model.stiffness[i] * (q[i] - model.q_spring[i]);
+    data.U[i] = times_motion_subspace<S>(model, i, data.IA[i]);
+    data.D[i] = joint_project<S>(model, i, data.U[i]) + armature_passive_partials(model, i).da;
+    data.u[i] = tau[i] - joint_project<S>(model, i, data.pA[i]) -
+                armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(0));
     if (p >= 0) {
       const Mat6<S> Ia = data.IA[i] - data.U[i] * data.U[i].transpose() / data.D[i];
       const Vec6<S> pa = data.pA[i] + Ia * data.c[i] + data.U[i] * (data.u[i] / data.D[i]);
@@ -46,21 +50,27 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
     const int p = model.parent[i];
     const Vec6<S> ap = data.X_up[i].apply_motion(p < 0 ? a0 : data.A[p]) + data.c[i];
     data.qdd[i] = (data.u[i] - data.U[i].dot(ap)) / data.D[i];
-    data.A[i] = ap + model.S[i].template cast<S>() * data.qdd[i];
+    data.A[i] = ap;
+    add_joint_motion(model, i, data.qdd[i], data.A[i]);
   }
   return data.qdd;
 }
 
 /// @brief y = M(q)⁻¹x in O(n), reusing the articulated inertias of the last aba(q, ·, ·) call
 /// (an ABA sweep with zero velocity and gravity). Returns data.Minv_x.
+/// Precondition: data holds aba at q (checked in debug builds).
 template <typename S, typename Xx>
 const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && x.size() == model.n, "minv_apply: x must have size model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
+                    "minv_apply needs aba(model, data, q, v, tau) first, and no other algorithm at "
+                    "another q since");
   const int n = model.n;
   for (int i = 0; i < n; ++i) data.pz[i].setZero();
   // backward: articulated bias forces of the load x
   for (int i = n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    data.Minv_x[i] = x[i] - model.S[i].template cast<S>().dot(data.pz[i]);
+    data.Minv_x[i] = x[i] - joint_project<S>(model, i, data.pz[i]);
     if (p >= 0) {
       data.pz[p] += data.X_up[i].apply_transpose_force(
           Vec6<S>(data.pz[i] + data.U[i] * (data.Minv_x[i] / data.D[i])));
@@ -71,23 +81,30 @@ const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::Mat
     const int p = model.parent[i];
     const Vec6<S> ap = p < 0 ? Vec6<S>::Zero() : data.X_up[i].apply_motion(data.az[p]);
     data.Minv_x[i] = (data.Minv_x[i] - data.U[i].dot(ap)) / data.D[i];
-    data.az[i] = ap + model.S[i].template cast<S>() * data.Minv_x[i];
+    data.az[i] = ap;
+    add_joint_motion(model, i, data.Minv_x[i], data.az[i]);
   }
   return data.Minv_x;
 }
 
 /// @brief data.rhs ← M(q)⁻¹·data.rhs for its first m columns (m ≤ n) in one pair of
 /// sweeps of 6×m blocks, reusing the articulated inertias of the last aba(q, ·, ·) call.
+/// Precondition: data holds aba at q (checked in debug builds).
 template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& data, int m) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && m >= 0 && m <= model.n,
+                    "minv_apply_columns: expected 0 <= m <= model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
+                    "minv_apply_columns needs aba(model, data, q, v, tau) first, and no other "
+                    "algorithm at another q since");
   const int n = model.n;
   auto Y = data.rhs.leftCols(m);
   for (int i = 0; i < n; ++i) data.Pm[i].leftCols(m).setZero();
   // backward: articulated bias forces of every load column
   for (int i = n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    const Vec6<S> Si = model.S[i].template cast<S>();
     auto P = data.Pm[i].leftCols(m);
-    Y.row(i).noalias() -= Si.transpose() * P;
+    auto yi = Y.row(i);
+    subtract_joint_projection(model, i, P, yi);
     if (p >= 0) {
       // Pm[p] += X_upᵀ (P + U u / D), force transform of each column
       const Transform<S>& X = data.X_up[i];
@@ -120,7 +137,7 @@ template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& da
     }
     Y.row(i).noalias() -= data.U[i].transpose() * A;
     Y.row(i) /= data.D[i];
-    A.noalias() += model.S[i].template cast<S>() * Y.row(i);
+    add_joint_motion(model, i, Y.row(i), A);
   }
 }
 

@@ -17,10 +17,16 @@
 namespace idmpc {
 
 /// @brief ∂q̈/∂q, ∂q̈/∂v and M⁻¹ into data.da_dq, da_dv, Minv. Precondition: data holds
-/// aba(model, data, q, v, τ) at this point (its q̈ and articulated inertias are reused).
+/// aba(model, data, q, v, τ) at this point (its q̈ and articulated inertias are reused); checked
+/// in debug builds.
 template <typename S, typename Q, typename Vv>
 void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                                const Eigen::MatrixBase<Vv>& v) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n && v.size() == model.n,
+                    "aba_derivatives_after_aba: q, v must have size model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),
+                    "aba_derivatives_after_aba needs aba(model, data, q, v, tau) at this (q, v) "
+                    "first, and no other algorithm at another q since");
   rnea_derivatives(model, data, q, v, data.qdd);  // same q: X_up unchanged for the sweep
   // M⁻¹ by one multi-column sweep through the ABA factorization, then the dense products
   const int n = model.n;

@@ -13,6 +13,10 @@ namespace idmpc {
 template <typename S, typename Q, typename Vv, typename Aa>
 const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                     const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  IDMPC_DEBUG_CHECK(data.n == model.n, "rnea: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
+                    "rnea: q, v, a must have size model.n");
+  data.passes.rnea(q);
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass: link velocities, accelerations and body forces
   for (int i = 0; i < model.n; ++i) {
@@ -35,8 +39,8 @@ const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
   // backward pass: joint torques, subtree forces, armature and passive forces
   for (int i = model.n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    data.tau[i] = joint_project<S>(model, i, data.F[i]) + model.armature[i] * a[i] +
-                  model.damping[i] * v[i] + model.stiffness[i] * (q[i] - model.q_spring[i]);
+    data.tau[i] = joint_project<S>(model, i, data.F[i]) +
+                  armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(a[i]));
     if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
   }
   return data.tau;

@@ -38,6 +38,10 @@ Mat6<S> coriolis_matrix(const Inertia<S>& I, const Vec6<S>& v, const Vec6<S>& h)
 template <typename S, typename Q, typename Vv, typename Aa>
 void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                       const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  IDMPC_DEBUG_CHECK(data.n == model.n, "rnea_derivatives: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
+                    "rnea_derivatives: q, v, a must have size model.n");
+  data.passes.kinematics(q);
   const int n = model.n;
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass in the world frame: placements, axes, velocities, accelerations, forces
@@ -45,7 +49,7 @@ void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixB
     const int p = model.parent[i];
     data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
     data.oX[i] = p < 0 ? data.X_up[i] : data.X_up[i] * data.oX[p];
-    data.oS[i] = data.oX[i].apply_inverse_motion(model.S[i].template cast<S>());
+    data.oS[i] = data.oX[i].apply_inverse_motion(motion_subspace<S>(model, i));
     const Vec6<S> vJ = data.oS[i] * v[i];
     data.oV[i] = p < 0 ? vJ : Vec6<S>(data.oV[p] + vJ);
     data.oA[i] = (p < 0 ? a0 : data.oA[p]) + data.oS[i] * a[i] + cross_motion<S>(data.oV[i], vJ);
@@ -76,8 +80,8 @@ void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixB
     data.G[j] = -data.oI[j].apply(data.psi[j]) - data.oB[j] * data.w[j] +
                 cross_force<S>(Sj, data.oF[j]);
     data.H[j] = data.oB[j] * Sj - S(2) * data.oI[j].apply(data.w[j]);
-    data.tau[j] = Sj.dot(data.oF[j]) + model.armature[j] * a[j] + model.damping[j] * v[j] +
-                  model.stiffness[j] * (q[j] - model.q_spring[j]);
+    data.tau[j] =
+        Sj.dot(data.oF[j]) + armature_and_passive<S>(model, j, S(q[j]), S(v[j]), S(a[j]));
   }
   // pairs (i, j) with j an ancestor of i or i itself, and their transposed places
   data.dtau_dq.setZero();
@@ -92,9 +96,10 @@ void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixB
         data.dtau_dv(j, i) = data.oS[j].dot(data.H[i]);
       }
     }
-    data.dtau_dq(i, i) += model.stiffness[i];
-    data.dtau_dv(i, i) += model.damping[i];
-    data.M(i, i) += model.armature[i];
+    const ArmaturePassivePartials d = armature_passive_partials(model, i);
+    data.dtau_dq(i, i) += d.dq;
+    data.dtau_dv(i, i) += d.dv;
+    data.M(i, i) += d.da;
   }
 }
 

@@ -17,14 +17,20 @@
 namespace idmpc {
 
 /// @brief (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M·w into data.g_q, g_v, g_a. Precondition: data holds
-/// rnea(model, data, q, v, a) at the point of linearization (w of size n).
+/// rnea(model, data, q, v, a) at the point of linearization (w of size n); checked in debug
+/// builds, as far as data can tell: no algorithm since has overwritten rnea's link velocities
+/// and accelerations (aba) or recomputed the kinematics at another q.
 template <typename S, typename W>
 void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& w) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && w.size() == model.n, "rnea_vjp: w must have size model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_rnea(),
+                    "rnea_vjp needs rnea(model, data, q, v, a) at the point of linearization "
+                    "first, and no aba or algorithm at another q since");
   const int n = model.n;
   // adjoint of the backward pass: force adjoints propagate root to leaves like velocities
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
-    const Vec6<S> Si = model.S[i].template cast<S>();
+    const Vec6<S> Si = motion_subspace<S>(model, i);
     data.fbar[i] = Si * w[i];
     if (p >= 0) data.fbar[i] += data.X_up[i].apply_motion(data.fbar[p]);
     data.g_q[i] = cross_motion<S>(data.fbar[i], Si).dot(data.F[i]);
@@ -34,7 +40,7 @@ void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& 
   // adjoint of the forward pass: leaves to root
   for (int i = n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    const Vec6<S> Si = model.S[i].template cast<S>();
+    const Vec6<S> Si = motion_subspace<S>(model, i);
     const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
     // body force f = I a + v ×* I v
     data.abar[i] += Ii.apply(data.fbar[i]);
@@ -42,13 +48,14 @@ void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& 
                     Ii.apply(cross_motion<S>(data.V[i], data.fbar[i])) +
                     cross_force<S>(data.vJ[i], data.abar[i]);
     // joint inputs, with armature, damping and stiffness
-    data.g_a[i] = Si.dot(data.abar[i]) + model.armature[i] * w[i];
+    const ArmaturePassivePartials d = armature_passive_partials(model, i);
+    data.g_a[i] = Si.dot(data.abar[i]) + d.da * w[i];
     data.g_v[i] = Si.dot(data.vbar[i]) + data.abar[i].dot(cross_motion<S>(data.V[i], Si)) +
-                  model.damping[i] * w[i];
+                  d.dv * w[i];
     // joint angle through X_i in a_i = X_i a_λ + … and v_i = X_i v_λ + …; (X_i a_λ) × S_i
     // equals (a_i − v_i × S_i q̇_i) × S_i since S_i × S_i = 0
     const Vec6<S> Xa = data.A[i] - cross_motion<S>(data.V[i], data.vJ[i]);
-    data.g_q[i] += data.abar[i].dot(cross_motion<S>(Xa, Si)) + model.stiffness[i] * w[i];
+    data.g_q[i] += data.abar[i].dot(cross_motion<S>(Xa, Si)) + d.dq * w[i];
     if (p >= 0) {
       data.g_q[i] += data.vbar[i].dot(cross_motion<S>(Vec6<S>(data.V[i] - data.vJ[i]), Si));
       data.abar[p] += data.X_up[i].apply_transpose_force(data.abar[i]);

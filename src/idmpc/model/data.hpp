@@ -3,11 +3,74 @@
 /// @brief Per-thread workspace of the dynamics algorithms. Every buffer is allocated here;
 /// the algorithms never allocate.
 
+#include <cstring>
 #include <vector>
 
+#include "idmpc/model/debug_check.hpp"
 #include "idmpc/model/model.hpp"
 
 namespace idmpc {
+
+/// @brief Which algorithm's results a Data holds, for the debug checks of the call-order
+/// preconditions (rnea_vjp after rnea; minv_apply, minv_apply_columns and
+/// aba_derivatives_after_aba after aba, at the same point). Written and read only when
+/// IDMPC_DEBUG_CHECKS; always present, so that Data's layout does not depend on the build type.
+template <typename S> class PassRecord {
+ public:
+  explicit PassRecord(int n)
+      : X_up_q_(VecX<S>::Zero(n)), rnea_q_(VecX<S>::Zero(n)), aba_q_(VecX<S>::Zero(n)),
+        aba_v_(VecX<S>::Zero(n)) {}
+
+  /// X_up was computed at q
+  template <typename Q> void kinematics(const Eigen::MatrixBase<Q>& q) {
+    if constexpr (kOn) X_up_q_ = q;
+  }
+  /// rnea(q, ·, ·) filled X_up, V, A, F, h, vJ
+  template <typename Q> void rnea(const Eigen::MatrixBase<Q>& q) {
+    if constexpr (kOn) {
+      kinematics(q);
+      rnea_q_ = q;
+      rnea_ = true;
+    }
+  }
+  /// aba(q, v, ·) filled X_up, IA, U, D, qdd and overwrote rnea's V, A, vJ
+  template <typename Q, typename V>
+  void aba(const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v) {
+    if constexpr (kOn) {
+      kinematics(q);
+      aba_q_ = q;
+      aba_v_ = v;
+      aba_ = true;
+      rnea_ = false;
+    }
+  }
+
+  /// the buffers hold an rnea pass whose X_up is still in place
+  bool holds_rnea() const { return rnea_ && same(rnea_q_, X_up_q_); }
+  /// the buffers hold an aba factorization whose X_up is still in place
+  bool holds_aba() const { return aba_ && same(aba_q_, X_up_q_); }
+  /// … and it was made at (q, v)
+  template <typename Q, typename V>
+  bool holds_aba_at(const Eigen::MatrixBase<Q>& q, const Eigen::MatrixBase<V>& v) const {
+    return holds_aba() && same(aba_q_, q) && same(aba_v_, v);
+  }
+
+ private:
+  static constexpr bool kOn = IDMPC_DEBUG_CHECKS != 0;
+
+  // bitwise equality: the same point is the same numbers (S may be a SIMD pack)
+  template <typename X> static bool same(const VecX<S>& a, const Eigen::MatrixBase<X>& b) {
+    if (a.size() != b.size()) return false;
+    for (Eigen::Index i = 0; i < a.size(); ++i) {
+      const S bi = b[i];
+      if (std::memcmp(&a[i], &bi, sizeof(S)) != 0) return false;
+    }
+    return true;
+  }
+
+  VecX<S> X_up_q_, rnea_q_, aba_q_, aba_v_;
+  bool rnea_ = false, aba_ = false;
+};
 
 template <typename S> struct DataTpl {
   template <typename T> using List = std::vector<T>;
@@ -26,7 +89,8 @@ template <typename S> struct DataTpl {
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
         pz(n), az(n), Minv_x(VecX<S>::Zero(n)),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
-        rhs(MatX<S>::Zero(n, n)) {}
+        rhs(MatX<S>::Zero(n, n)),
+        passes(n) {}
 
   int n;
 
@@ -74,6 +138,9 @@ template <typename S> struct DataTpl {
   Block6 Tm;
   Eigen::Matrix<S, 3, Eigen::Dynamic> Wm;
   MatX<S> rhs;
+
+  /// what the buffers above hold (debug builds)
+  PassRecord<S> passes;
 };
 
 using Data = DataTpl<double>;

@@ -1,7 +1,11 @@
 #pragma once
 /// @file joint.hpp
-/// @brief Joint kernels: the joint transform XJ(q)·X_tree of a revolute or prismatic joint and
-/// products with the (sparse) motion subspace S.
+/// @brief Joint kernels: the joint transform XJ(q)·X_tree of a revolute or prismatic joint, every
+/// product with its motion subspace S, and the joint's armature and passive terms. The
+/// algorithms touch S, armature, damping and stiffness only through these functions.
+///
+/// S is represented by (joint_type, axis) alone: S_i = [s_i; 0] for a revolute joint and
+/// [0; s_i] for a prismatic one, s_i = model.axis[i] (angular-first).
 
 #include <cmath>
 
@@ -30,7 +34,7 @@ template <typename S> Transform<S> joint_transform(const Model& model, int i, co
     return X;
   }
   // rotation about ±e_k mixes only the two other rows of E_tree
-  const S angle = d * S(model.axis_sign[i]);
+  const S angle = d * S(model.axis[i][k]);
   const S c = cos(angle), s = sin(angle);
   const int a = (k + 1) % 3, b = (k + 2) % 3;
   X.E.row(k) = XT.E.row(k).template cast<S>();
@@ -46,21 +50,76 @@ template <typename S> Vec6<S> base_acceleration(const Model& model) {
   return a0;
 }
 
-/// @brief m += S_i·x (motion subspace of joint i times a joint-space scalar).
-template <typename S> void add_joint_motion(const Model& model, int i, const S& x, Vec6<S>& m) {
-  const auto s = model.axis[i].template cast<S>();
+/// @brief S_i as a dense 6-vector (where a full motion is needed, e.g. to transform it).
+template <typename S> Vec6<S> motion_subspace(const Model& model, int i) {
+  Vec6<S> s = Vec6<S>::Zero();
   if (model.joint_type[i] == JointType::kRevolute) {
-    m.template head<3>() += s * x;
+    s.template head<3>() = model.axis[i].template cast<S>();
   } else {
-    m.template tail<3>() += s * x;
+    s.template tail<3>() = model.axis[i].template cast<S>();
+  }
+  return s;
+}
+
+/// @brief m += S_i·x: x a joint-space scalar and m a 6-vector, or x a 1×k row and m a 6×k
+/// block (k motions at once).
+template <typename X, typename Dst>
+void add_joint_motion(const Model& model, int i, const X& x, Eigen::MatrixBase<Dst>& m) {
+  using S = typename Dst::Scalar;
+  const Vec3<S> s = model.axis[i].template cast<S>();
+  if (model.joint_type[i] == JointType::kRevolute) {
+    m.template topRows<3>().noalias() += s * x;
+  } else {
+    m.template bottomRows<3>().noalias() += s * x;
   }
 }
 
 /// @brief S_iᵀ·f (projection of a force, or of any 6-vector, on joint i's axis).
 template <typename S> S joint_project(const Model& model, int i, const Vec6<S>& f) {
-  const auto s = model.axis[i].template cast<S>();
+  const Vec3<S> s = model.axis[i].template cast<S>();
   return model.joint_type[i] == JointType::kRevolute ? S(s.dot(f.template head<3>()))
                                                      : S(s.dot(f.template tail<3>()));
+}
+
+/// @brief row −= S_iᵀ·F for a 6×k block F (k projections at once; row is 1×k).
+template <typename Row, typename F>
+void subtract_joint_projection(const Model& model, int i, const Eigen::MatrixBase<F>& Fm,
+                               Eigen::MatrixBase<Row>& row) {
+  using S = typename F::Scalar;
+  const Vec3<S> s = model.axis[i].template cast<S>();
+  if (model.joint_type[i] == JointType::kRevolute) {
+    row.noalias() -= s.transpose() * Fm.template topRows<3>();
+  } else {
+    row.noalias() -= s.transpose() * Fm.template bottomRows<3>();
+  }
+}
+
+/// @brief M·S_i for a 6×6 matrix M (e.g. U = IA·S of the articulated-body algorithm).
+template <typename S> Vec6<S> times_motion_subspace(const Model& model, int i, const Mat6<S>& M) {
+  const Vec3<S> s = model.axis[i].template cast<S>();
+  return model.joint_type[i] == JointType::kRevolute ? Vec6<S>(M.template leftCols<3>() * s)
+                                                     : Vec6<S>(M.template rightCols<3>() * s);
+}
+
+/// @brief The partial derivatives of armature_and_passive with respect to q, v and a.
+struct ArmaturePassivePartials {
+  double dq;  ///< stiffness k
+  double dv;  ///< damping d
+  double da;  ///< armature
+};
+
+/// @brief Joint i's own terms of ID(q, v, a)_i besides the bodies' (DESIGN §2–§3):
+/// armature·a + d·v + k·(q − q_spring), i.e. the armature's inertia minus MuJoCo's passive force
+/// −d·v − k·(q − q_spring). Linear in (q, v, a): its partials are armature_passive_partials.
+/// FD (ABA) uses it with a = 0 and the armature in D.
+template <typename S>
+S armature_and_passive(const Model& model, int i, const S& q, const S& v, const S& a) {
+  return model.armature[i] * a + model.damping[i] * v + model.stiffness[i] * (q - model.q_spring[i]);
+}
+
+/// @brief ∂/∂q, ∂/∂v, ∂/∂a of armature_and_passive(model, i, q, v, a): (k, d, armature).
+inline ArmaturePassivePartials armature_passive_partials(const Model& model, int i) {
+  return {model.stiffness[i], model.damping[i], model.armature[i]};
 }
 
 }  // namespace idmpc

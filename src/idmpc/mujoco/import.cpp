@@ -4,6 +4,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "idmpc/mujoco/load.hpp"
 
@@ -130,16 +131,9 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
                                 " but nv = " + std::to_string(m->nv) + ": expected 1-DoF joints");
   }
 
-  ImportedModel out;
-  Model& model = out.model;
-  model.name = source;
-  const int n = m->nv;
-  model.n = n;
-  model.q_ref.resize(n);
-  model.armature.resize(n);
-  model.damping.resize(n);
-  model.stiffness.resize(n);
-  model.q_spring.resize(n);
+  // one link per dof, in MuJoCo's dof order
+  std::vector<Link> links;
+  links.reserve(m->nv);
 
   // per body: the link its frame is rigidly attached to and that link's frame → body frame
   std::vector<int> link_of_body(m->nbody, -1);
@@ -157,36 +151,34 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
     for (int k = 0; k < m->body_jntnum[b]; ++k) {
       const int j = m->body_jntadr[b] + k;
       const int i = m->jnt_dofadr[j];
-      if (i != static_cast<int>(model.parent.size())) {
+      if (i != static_cast<int>(links.size())) {
         throw std::invalid_argument("model '" + source + "': dofs are not in body order at " +
                                     joint_label(m, j));
       }
       // link frame: the body frame moved to the joint anchor; joints of one body compose
       const Vec3<double> anchor = vec3(m->jnt_pos + 3 * j);
-      model.X_tree.push_back(k == 0 ? translation(anchor) * pre : translation(anchor - prev_anchor));
-      model.parent.push_back(link);
-      model.joint_type.push_back(m->jnt_type[j] == mjJNT_HINGE ? JointType::kRevolute
-                                                               : JointType::kPrismatic);
-      model.axis.push_back(vec3(m->jnt_axis + 3 * j).normalized());
-      model.I.emplace_back();
-      model.joint_names.push_back(object_name(m, mjOBJ_JOINT, j));
-      model.q_ref[i] = m->qpos0[m->jnt_qposadr[j]];
-      model.armature[i] = m->dof_armature[i];
-      model.damping[i] = passive ? m->dof_damping[i] : 0.0;
-      model.stiffness[i] = passive ? m->jnt_stiffness[j] : 0.0;
-      model.q_spring[i] = m->qpos_spring[m->jnt_qposadr[j]];
+      Link& l = links.emplace_back();
+      l.X_tree = k == 0 ? translation(anchor) * pre : translation(anchor - prev_anchor);
+      l.parent = link;
+      l.joint_type = m->jnt_type[j] == mjJNT_HINGE ? JointType::kRevolute : JointType::kPrismatic;
+      l.axis = vec3(m->jnt_axis + 3 * j).normalized();
+      l.joint_name = object_name(m, mjOBJ_JOINT, j);
+      l.q_ref = m->qpos0[m->jnt_qposadr[j]];
+      l.armature = m->dof_armature[i];
+      l.damping = passive ? m->dof_damping[i] : 0.0;
+      l.stiffness = passive ? m->jnt_stiffness[j] : 0.0;
+      l.q_spring = m->qpos_spring[m->jnt_qposadr[j]];
       link = i;
       prev_anchor = anchor;
     }
     link_of_body[b] = link;
     body_in_link[b] = m->body_jntnum[b] > 0 ? translation(-prev_anchor) : pre;
     // welded bodies merge into the link they hang from; those on the base carry nothing
-    if (link >= 0) model.I[link] += body_inertia(m, b).transformed_to_parent(body_in_link[b]);
+    if (link >= 0) links[link].I += body_inertia(m, b).transformed_to_parent(body_in_link[b]);
   }
-  model.gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
-                                                         : vec3(m->opt.gravity);
-  model.finalize();
-  out.actuation = import_actuation(m, source, options);
+  const Vec3<double> gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
+                                                                      : vec3(m->opt.gravity);
+  ImportedModel out{Model(links, gravity, source), import_actuation(m, source, options), {}};
   out.unmodeled = unmodeled_features(m);
   return out;
 }

@@ -1,0 +1,110 @@
+#include "idmpc/model/model.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <utility>
+
+namespace idmpc {
+namespace {
+
+// unit-norm and orthonormality tolerance: the importer normalizes, so only rounding remains
+constexpr double kUnitTolerance = 1e-9;
+
+std::string label(const std::vector<Link>& links, size_t i) {
+  const std::string& name = links[i].joint_name;
+  return "link " + std::to_string(i) + (name.empty() ? "" : " (joint '" + name + "')");
+}
+
+// every check of the constructor, before any member is made; returns n
+int checked_size(const std::vector<Link>& links, const Vec3<double>& gravity,
+                 const std::string& name) {
+  const std::string where = name.empty() ? "model" : "model '" + name + "'";
+  if (links.empty()) throw std::invalid_argument(where + ": expected at least one link, got none");
+  if (!gravity.allFinite()) throw std::invalid_argument(where + ": gravity is not finite");
+  for (size_t i = 0; i < links.size(); ++i) {
+    const Link& l = links[i];
+    const auto fail = [&](const std::string& what) {
+      throw std::invalid_argument(where + ", " + label(links, i) + ": " + what);
+    };
+    if (l.parent < -1 || l.parent >= static_cast<int>(i)) {
+      fail("parent " + std::to_string(l.parent) +
+           " is not an earlier link or -1 (expected topological order)");
+    }
+    if (!l.axis.allFinite() || std::abs(l.axis.norm() - 1.0) > kUnitTolerance) {
+      fail("joint axis must be a unit vector, got norm " + std::to_string(l.axis.norm()));
+    }
+    const Mat3<double>& E = l.X_tree.E;
+    if (!E.allFinite() || !l.X_tree.r.allFinite() ||
+        (E * E.transpose() - Mat3<double>::Identity()).cwiseAbs().maxCoeff() > kUnitTolerance) {
+      fail("X_tree must be finite with an orthonormal rotation");
+    }
+    if (!std::isfinite(l.I.m) || !l.I.h.allFinite() || !l.I.Ibar.allFinite() || l.I.m < 0) {
+      fail("inertia must be finite with mass >= 0, got mass " + std::to_string(l.I.m));
+    }
+    for (double x : {l.q_ref, l.armature, l.damping, l.stiffness, l.q_spring}) {
+      if (!std::isfinite(x)) fail("q_ref, armature, damping, stiffness and q_spring must be finite");
+    }
+  }
+  return static_cast<int>(links.size());
+}
+
+template <typename T> std::vector<T> gather(const std::vector<Link>& links, T Link::*field) {
+  std::vector<T> out;
+  out.reserve(links.size());
+  for (const Link& l : links) out.push_back(l.*field);
+  return out;
+}
+
+VecX<double> gather_vector(const std::vector<Link>& links, double Link::*field) {
+  VecX<double> out(static_cast<Eigen::Index>(links.size()));
+  for (size_t i = 0; i < links.size(); ++i) out[static_cast<Eigen::Index>(i)] = links[i].*field;
+  return out;
+}
+
+std::vector<int> axis_indices(const std::vector<Link>& links) {
+  std::vector<int> out(links.size(), -1);
+  for (size_t i = 0; i < links.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(links[i].axis[k]) == 1.0) out[i] = k;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
+             std::string model_name)
+    : n(checked_size(links, world_gravity, model_name)),
+      parent(gather(links, &Link::parent)),
+      joint_type(gather(links, &Link::joint_type)),
+      axis(gather(links, &Link::axis)),
+      X_tree(gather(links, &Link::X_tree)),
+      I(gather(links, &Link::I)),
+      q_ref(gather_vector(links, &Link::q_ref)),
+      armature(gather_vector(links, &Link::armature)),
+      damping(gather_vector(links, &Link::damping)),
+      stiffness(gather_vector(links, &Link::stiffness)),
+      q_spring(gather_vector(links, &Link::q_spring)),
+      gravity(world_gravity),
+      joint_names(gather(links, &Link::joint_name)),
+      name(std::move(model_name)),
+      axis_index(axis_indices(links)) {}
+
+Link Model::link(int i) const {
+  Link l;
+  l.parent = parent[i];
+  l.joint_type = joint_type[i];
+  l.axis = axis[i];
+  l.X_tree = X_tree[i];
+  l.I = I[i];
+  l.q_ref = q_ref[i];
+  l.armature = armature[i];
+  l.damping = damping[i];
+  l.stiffness = stiffness[i];
+  l.q_spring = q_spring[i];
+  l.joint_name = joint_names[i];
+  return l;
+}
+
+}  // namespace idmpc
