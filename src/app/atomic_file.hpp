@@ -2,55 +2,67 @@
 /// @file atomic_file.hpp
 /// @brief An output file written to a temporary name beside its target and renamed into place
 /// on commit(), so that an error never leaves a half-written file.
+///
+/// - A regular target (or a new one) is written to `<target>.tmp.<pid>.<k>` in the target's
+///   directory and renamed onto it by commit(). An existing target keeps its permission bits
+///   (and, as root, its owner). The temporary is registered for removal on SIGINT/SIGTERM
+///   (temporary_files.hpp) and removed by the destructor if commit() was never reached.
+/// - A symbolic link is followed: the temporary goes beside the link's final target and is
+///   renamed onto that target, so the link stays a link.
+/// - A special file (character device such as /dev/null, FIFO, socket) is never replaced: it is
+///   written through directly. A FIFO is opened on the first call of stream(), so that merely
+///   constructing an AtomicFile (to check a path early) does not send end-of-file to a reader.
+/// - A directory is refused.
+/// Every failure names the path and the reason (strerror), e.g. "No space left on device".
 
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
-#include <stdexcept>
+#include <memory>
+#include <ostream>
 #include <string>
-#include <unistd.h>
+
+#include "app/temporary_files.hpp"
 
 namespace idmpc::app {
 
+class FdStreamBuf;
+
 class AtomicFile {
  public:
-  /// Opens the temporary file at once, so that an unwritable path fails before any work.
-  explicit AtomicFile(std::string path) : path_(std::move(path)) {
-    namespace fs = std::filesystem;
-    const fs::path target(path_);
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    if (!fs::is_directory(dir)) {
-      throw std::runtime_error("cannot write '" + path_ + "': directory '" + dir.string() +
-                               "' does not exist");
-    }
-    tmp_ = path_ + ".tmp." + std::to_string(::getpid());
-    out_.open(tmp_);
-    if (!out_) throw std::runtime_error("cannot write '" + path_ + "': permission denied or bad path");
-  }
+  /// Creates the temporary file at once (or opens a non-FIFO special file), so that an
+  /// unwritable path fails before any work.
+  /// @throws std::runtime_error naming the path and the reason
+  explicit AtomicFile(std::string path);
   AtomicFile(const AtomicFile&) = delete;
   AtomicFile& operator=(const AtomicFile&) = delete;
-  ~AtomicFile() {
-    if (!committed_) {
-      out_.close();
-      std::remove(tmp_.c_str());
-    }
-  }
-  std::ofstream& stream() { return out_; }
+  /// Removes the temporary file unless commit() succeeded.
+  ~AtomicFile();
+
+  /// @brief The stream to write to. Write errors are kept and reported by commit().
+  /// @throws std::runtime_error if a FIFO target cannot be opened
+  std::ostream& stream();
+  /// @brief The path as given.
   const std::string& path() const { return path_; }
-  /// @brief Flushes and renames the temporary file onto the target.
-  void commit() {
-    out_.close();
-    if (!out_ || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
-      std::remove(tmp_.c_str());
-      throw std::runtime_error("cannot write '" + path_ + "'");
-    }
-    committed_ = true;
-  }
+  /// @brief True if the target is a special file written through directly.
+  bool direct() const { return direct_; }
+  /// @brief Flushes, syncs and renames the temporary file onto the target (or, for a special
+  /// file, flushes and closes it).
+  /// @throws std::runtime_error naming the path and the reason if any write, the sync, the
+  /// close or the rename failed; the temporary is removed and the target left as it was.
+  void commit();
 
  private:
-  std::string path_, tmp_;
-  std::ofstream out_;
+  [[noreturn]] void fail(const std::string& what, int err);
+  void open_direct();
+  void discard();
+
+  std::string path_;    // as given
+  std::string target_;  // the file that is replaced (links resolved) or written through
+  std::string tmp_;
+  bool direct_ = false;
   bool committed_ = false;
+  int fd_ = -1;
+  std::unique_ptr<FdStreamBuf> buf_;
+  std::unique_ptr<std::ostream> out_;
+  std::unique_ptr<TemporaryFile> registration_;
 };
 
 }  // namespace idmpc::app

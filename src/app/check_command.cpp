@@ -24,10 +24,11 @@ void print_summary(const mjModel* m, const mj::ImportedModel& imported) {
               m->nbody - 1, model.gravity.x(), model.gravity.y(), model.gravity.z());
   for (int i = 0; i < model.n; ++i) {
     const Vec3<double>& s = model.axis[i];
-    std::printf("  %2d %-16s %-6s axis (%+.3f %+.3f %+.3f)  parent %2d  mass %.4g%s\n", i,
-                model.joint_names[i].c_str(),
-                model.joint_type[i] == JointType::kRevolute ? "hinge" : "slide", s.x(), s.y(),
-                s.z(), model.parent[i], model.I[i].m,
+    // a hinge moves by an angle under a torque, a slide by a length under a force
+    const bool hinge = model.joint_type[i] == JointType::kRevolute;
+    std::printf("  %2d %-16s %-6s axis (%+.3f %+.3f %+.3f)  parent %2d  mass %.4g  q [%s], tau [%s]%s\n",
+                i, model.joint_names[i].c_str(), hinge ? "hinge" : "slide", s.x(), s.y(), s.z(),
+                model.parent[i], model.I[i].m, hinge ? "rad" : "m", hinge ? "N m" : "N",
                 model.armature[i] || model.damping[i] || model.stiffness[i] ? "  (passive/armature)" : "");
   }
   std::printf("actuation: %s\n", imported.actuation.direct
@@ -50,6 +51,11 @@ void run(const CheckOptions& opt) {
       mj::import_model(m.get(), opt.model, mj::ImportOptions{opt.direct_torque});
   print_summary(m.get(), imported);
   const auto entries = mj::check_model(m.get(), imported.model, opt.samples, opt.seed);
+  const auto simplified = mj::reference_simplifications(m.get());
+  if (!simplified.empty()) {
+    std::printf("\nMuJoCo reference without what the controller does not model:\n");
+    for (const auto& s : simplified) std::printf("  - %s switched off\n", s.c_str());
+  }
   std::printf("\n%-48s %12s %10s\n", "check (worst relative error)", "error", "tolerance");
   int failed = 0;
   for (const auto& e : entries) {
@@ -61,7 +67,7 @@ void run(const CheckOptions& opt) {
   for (const auto& w : warnings) std::printf("MuJoCo warning: %s\n", w.c_str());
   std::fflush(stdout);
   if (failed) {
-    throw std::runtime_error(std::to_string(failed) + " check(s) exceed their tolerance on '" +
+    throw std::runtime_error(std::to_string(failed) + " check(s) exceed their tolerance or are NaN on '" +
                              opt.model + "'");
   }
   std::printf("all %zu checks passed at %d random states (seed %u)\n", entries.size(),

@@ -2,10 +2,15 @@
 // wrong, outputs in the promised format, and no half-written file left behind by a failure.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
+#include <chrono>
 #include <cstdio>
 #include <cmath>
 #include <cstdlib>
@@ -15,6 +20,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -30,7 +36,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kBinary = IDMPC_BINARY;
+// IDMPC_TEST_BINARY runs these tests against another build (e.g. an older one, to see a test
+// fail without its fix)
+const std::string kBinary = std::getenv("IDMPC_TEST_BINARY") ? std::getenv("IDMPC_TEST_BINARY") : IDMPC_BINARY;
 const std::string kArm4 = IDMPC_SOURCE_DIR "/mjcf/arm4.xml";
 const std::string kTree = IDMPC_SOURCE_DIR "/mjcf/tree.xml";
 
@@ -102,10 +110,11 @@ class Cli : public ::testing::Test {
     else std::printf("kept %s for inspection\n", dir_.c_str());
   }
 
-  // runs `idmpc <args>` from the test directory, stdout and stderr captured to files
-  Result idmpc(const std::string& args) {
+  // runs `idmpc <args>` from the test directory, stdout and stderr captured to files; `shell`
+  // (e.g. "ulimit -v 3000000;") runs first in the same shell
+  Result idmpc(const std::string& args, const std::string& shell = "") {
     const fs::path out = dir_ / ".stdout", err = dir_ / ".stderr";
-    const std::string cmd = "cd " + quote(dir_.string()) + " && " + quote(kBinary) + " " + args +
+    const std::string cmd = "cd " + quote(dir_.string()) + " && " + shell + " " + quote(kBinary) + " " + args +
                             " > " + quote(out.string()) + " 2> " + quote(err.string());
     const int status = std::system(cmd.c_str());
     Result r;
@@ -342,13 +351,17 @@ const std::vector<BadInput>& bad_inputs() {
       {"--Qq 1 2 3", {"--Qq", "3 values"}},
       {"--R -1", {"--R", "non-negative"}},
       {"--q0 0 0", {"--q0", "2 values"}},
-      {"BALL", {"shoulder_ball", "ball"}}};
+      {"BALL", {"shoulder_ball", "ball"}},
+      // kmax + 1 overflowed an int in the GMRES workspace; kmax > n·N is meaningless anyway
+      {"--kmax 2147483647", {"kmax", "2147483647", "exceed"}},
+      {"--kmax 101", {"kmax", "101", "100"}}};
   return inputs;
 }
 
 std::string bad_input_name(const ::testing::TestParamInfo<BadInput>& info) {
   static const std::vector<std::string> names = {"formulation", "derivatives", "N",  "kmax",      "dt",
-                                                 "Qq",          "R",           "q0", "ball_joint"};
+                                                 "Qq",          "R",           "q0", "ball_joint",
+                                                 "kmax_int_max", "kmax_above_dimension"};
   return names.at(info.index);
 }
 
@@ -480,6 +493,431 @@ TEST_F(Cli, SweepIsResumable) {
   for (const auto& e : fs::directory_iterator(dir_ / "sweep")) {
     EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// the command line itself: parse errors, --help, --version, numbers
+
+class CliParseError : public Cli, public ::testing::WithParamInterface<BadInput> {};
+
+TEST_P(CliParseError, ExitsOneWithOneErrorLine) {
+  const auto& [args, needles] = GetParam();
+  std::string expanded = args;
+  const std::string arm = "ARM";
+  if (expanded.find(arm) != std::string::npos) expanded.replace(expanded.find(arm), arm.size(), quote(kArm4));
+  const Result r = idmpc(expanded);
+  SCOPED_TRACE("idmpc " + expanded);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err.rfind("idmpc: error: ", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  for (const std::string& needle : needles) {
+    EXPECT_NE(r.err.find(needle), std::string::npos) << "stderr does not name '" << needle << "': " << r.err;
+  }
+  EXPECT_EQ(r.out, "");
+}
+
+const std::vector<BadInput>& parse_errors() {
+  static const std::vector<BadInput> inputs = {
+      {"swingup ARM --horizon 10", {"'--horizon 10'", "swingup --help"}},
+      {"check", {"model", "required"}},
+      {"check ARM --samples abc", {"--samples", "abc"}},
+      {"", {"subcommand"}},
+      {"frobnicate", {"frobnicate"}},
+      {"dynamics ARM --in", {"--in"}}};
+  return inputs;
+}
+
+std::string parse_error_name(const ::testing::TestParamInfo<BadInput>& info) {
+  static const std::vector<std::string> names = {"unknown_option", "missing_model", "not_a_number",
+                                                 "no_subcommand", "unknown_subcommand", "missing_value"};
+  return names.at(info.index);
+}
+
+INSTANTIATE_TEST_SUITE_P(Options, CliParseError, ::testing::ValuesIn(parse_errors()), parse_error_name);
+
+TEST_F(Cli, HelpAndVersionExitZero) {
+  for (const std::string args : {"--help", "swingup --help", "dynamics --help"}) {
+    const Result r = idmpc(args);
+    EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+    EXPECT_NE(r.out.find("Usage"), std::string::npos) << args << ": " << r.out;
+    EXPECT_EQ(r.err, "") << args;
+  }
+  const Result v = idmpc("--version");
+  EXPECT_EQ(v.code, 0) << v.err;
+  EXPECT_TRUE(std::regex_search(v.out, std::regex("^idmpc [0-9.]+ \\(MuJoCo [0-9.]+\\)\n$"))) << v.out;
+}
+
+TEST_F(Cli, NegativeNumbersParseInEveryForm) {
+  const Result r = idmpc("swingup " + quote(kArm4) + " --q0 .4 -.4 -1e-3 -.5 --qref -.25 0 0 0 --duration 0.002 --log log.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(slurp(dir_ / "log.csv"));
+  ASSERT_GE(lines.size(), 2u);
+  const std::vector<std::string> f = split(lines[1]);
+  ASSERT_GE(f.size(), 5u);
+  const double q0[] = {0.4, -0.4, -1e-3, -0.5};
+  for (int i = 0; i < 4; ++i) EXPECT_DOUBLE_EQ(std::stod(f[1 + i]), q0[i]) << "q" << i;
+}
+
+// ---------------------------------------------------------------------------------------------
+// outputs: never destroy what is not ours, never report success on a failed write
+
+// states of arm4 (n = 4) with a header; `rows` random rows
+std::string arm4_states(int rows = 3) { return random_rows(4, rows, 11, true).csv; }
+
+bool is_named_pipe(const fs::path& p) { return fs::status(p).type() == fs::file_type::fifo; }
+bool is_char_device(const fs::path& p) { return fs::status(p).type() == fs::file_type::character; }
+
+TEST_F(Cli, DynamicsRefusesAnOutputThatIsAnInput) {
+  const std::string states = arm4_states();
+  write("states.csv", states);
+  fs::create_symlink("states.csv", dir_ / "alias.csv");
+  fs::copy_file(kArm4, dir_ / "arm4.xml");
+  for (const std::string out : {"states.csv", "alias.csv", "./states.csv"}) {
+    const Result r = idmpc("dynamics arm4.xml --in states.csv --out " + out);
+    expect_error(r, {"--out '" + out + "'", "--in 'states.csv'", "same file"});
+  }
+  const Result r = idmpc("dynamics arm4.xml --in states.csv --out arm4.xml");
+  expect_error(r, {"--out 'arm4.xml'", "model 'arm4.xml'"});
+  EXPECT_EQ(slurp(dir_ / "states.csv"), states);
+  EXPECT_EQ(slurp(dir_ / "arm4.xml"), slurp(kArm4));
+  expect_no_temporaries();
+}
+
+TEST_F(Cli, DynamicsRefusesADirectoryOutput) {
+  write("states.csv", arm4_states());
+  fs::create_directory(dir_ / "results");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out results");
+  expect_error(r, {"--out 'results'", "directory"});
+  EXPECT_TRUE(fs::is_directory(dir_ / "results"));
+}
+
+TEST_F(Cli, DynamicsWritesThroughAFifo) {
+  write("states.csv", arm4_states(3));
+  const fs::path fifo = dir_ / "out.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::string received;
+  std::thread reader([&] { received = slurp(fifo); });
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.fifo");
+  // release the reader if nothing ever opened the FIFO for writing
+  const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+  if (fd >= 0) ::close(fd);
+  reader.join();
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(is_named_pipe(fifo)) << "the FIFO was replaced";
+  EXPECT_EQ(lines_of(received).size(), 4u) << received;
+  expect_no_temporaries();
+}
+
+class CliDevice : public Cli {
+ protected:
+  // a character device node in the test directory: (1, 3) discards, (1, 7) is always full
+  fs::path device(const std::string& name, unsigned minor) {
+    const fs::path p = dir_ / name;
+    if (::mknod(p.c_str(), S_IFCHR | 0666, makedev(1, minor)) != 0) return {};
+    const int fd = ::open(p.c_str(), O_WRONLY);
+    if (fd < 0) return {};  // e.g. a filesystem mounted nodev
+    ::close(fd);
+    return p;
+  }
+};
+
+TEST_F(CliDevice, DynamicsWritesThroughACharacterDevice) {
+  const fs::path null = device("null", 3);
+  if (null.empty()) GTEST_SKIP() << "cannot create a device node here (needs root and a dev-capable filesystem)";
+  write("states.csv", arm4_states());
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out null");
+  EXPECT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(is_char_device(null)) << "the device was replaced by a regular file";
+  expect_no_temporaries();
+}
+
+TEST_F(CliDevice, DynamicsReportsWhyAWriteToAFullDeviceFailed) {
+  const fs::path full = device("full", 7);
+  if (full.empty()) GTEST_SKIP() << "cannot create a device node here (needs root and a dev-capable filesystem)";
+  write("states.csv", arm4_states());
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out full");
+  expect_error(r, {"'full'", "No space left on device"});
+  EXPECT_TRUE(is_char_device(full)) << "the device was replaced by a regular file";
+  expect_no_temporaries();
+}
+
+TEST_F(Cli, DynamicsFollowsASymlinkedOutput) {
+  write("states.csv", arm4_states());
+  fs::create_directory(dir_ / "real");
+  std::ofstream(dir_ / "real" / "target.csv") << "old\n";
+  fs::create_symlink("real/target.csv", dir_ / "out.csv");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(fs::is_symlink(dir_ / "out.csv")) << "the link was replaced by a regular file";
+  EXPECT_EQ(slurp(dir_ / "real" / "target.csv").rfind("tau0,", 0), 0u);
+  for (const auto& e : fs::directory_iterator(dir_ / "real")) {
+    EXPECT_EQ(e.path().filename(), "target.csv") << "left behind: " << e.path();
+  }
+  expect_no_temporaries();
+}
+
+TEST_F(Cli, DynamicsKeepsTheOutputsPermissions) {
+  write("states.csv", arm4_states());
+  write("out.csv", "old\n");
+  fs::permissions(dir_ / "out.csv", fs::perms::owner_read | fs::perms::owner_write);
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(fs::status(dir_ / "out.csv").permissions(), fs::perms::owner_read | fs::perms::owner_write);
+  EXPECT_EQ(slurp(dir_ / "out.csv").rfind("tau0,", 0), 0u);
+}
+
+TEST_F(Cli, DynamicsSaysWhyAWriteFailedAndKeepsTheOldFile) {
+  // a file-size limit of a few KiB (SIGXFSZ ignored) makes the write fail as a full disk would
+  write("states.csv", arm4_states(200));
+  write("out.csv", "old\n");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv", "ulimit -f 8; trap '' XFSZ;");
+  expect_error(r, {"'out.csv'", "File too large"});
+  EXPECT_EQ(slurp(dir_ / "out.csv"), "old\n");
+  expect_no_temporaries();
+}
+
+// a dynamics run blocked on a FIFO input, then interrupted: its temporary output goes too
+class CliInterrupted : public Cli, public ::testing::WithParamInterface<int> {};
+
+TEST_P(CliInterrupted, DynamicsLeavesNoTemporary) {
+  const int sig = GetParam();
+  const fs::path fifo = dir_ / "in.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string cmd = "cd " + quote(dir_.string()) + " && exec " + quote(kBinary) + " dynamics " +
+                          quote(kArm4) + " --in in.fifo --out out.csv 2> .stderr";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // open the FIFO once the command reads it, feed one row, wait for the temporary output
+  using clock = std::chrono::steady_clock;
+  const auto deadline = clock::now() + std::chrono::seconds(20);
+  int fd = -1;
+  while (fd < 0 && clock::now() < deadline) {
+    fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+    if (fd < 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  bool temporary = false;
+  if (fd >= 0) {
+    const std::string rows = arm4_states(1);
+    EXPECT_EQ(::write(fd, rows.data(), rows.size()), static_cast<ssize_t>(rows.size()));
+    while (!temporary && clock::now() < deadline) {
+      for (const std::string& name : files()) temporary |= name.find(".tmp.") != std::string::npos;
+      if (!temporary) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  ::kill(pid, sig);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  if (fd >= 0) ::close(fd);
+  ASSERT_TRUE(temporary) << "the command never created its temporary output: " << slurp(dir_ / ".stderr");
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
+  fs::remove(dir_ / ".stderr");
+  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+  expect_no_temporaries();
+}
+
+INSTANTIATE_TEST_SUITE_P(Signals, CliInterrupted, ::testing::Values(SIGINT, SIGTERM),
+                         [](const auto& info) { return std::string(info.param == SIGINT ? "SIGINT" : "SIGTERM"); });
+
+// ---------------------------------------------------------------------------------------------
+// dynamics: hostile inputs
+
+std::string arm4_row(const std::string& v0 = "0.5") {
+  return "0.1,0.2,0.3,0.4," + v0 + ",0,0,0,1,2,3,4";
+}
+
+TEST_F(Cli, DynamicsRejectsANonFiniteResultNamingTheRow) {
+  write("states.csv", arm4_row() + "\n" + arm4_row("1e308") + "\n");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+  expect_error(r, {"line 2", "not finite"});
+  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+  expect_no_temporaries();
+}
+
+TEST_F(Cli, DynamicsRejectsNonFiniteInputsNamingTheField) {
+  for (const std::string bad : {"nan", "inf", "1e999"}) {
+    write("states.csv", arm4_row() + "\n" + arm4_row(bad) + "\n");
+    const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+    expect_error(r, {"line 2", "field 5", "'" + bad + "'"});
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+}
+
+TEST_F(Cli, DynamicsDoesNotTakeABadFirstRowForAHeader) {
+  write("states.csv", "abc,0.2,0.3,0.4,0.5,0,0,0,1,2,3,4\n" + arm4_row() + "\n");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+  expect_error(r, {"line 1", "field 1", "'abc'", "not a number"});
+  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+}
+
+TEST_F(Cli, DynamicsRejectsANulByte) {
+  std::string row = arm4_row();
+  row.insert(row.find(",0,0,0") + 2, std::string(1, '\0'));  // "0\0" in field 6
+  write("states.csv", arm4_row() + "\n" + row + "\n");
+  ASSERT_EQ(fs::file_size(dir_ / "states.csv"), 2 * (arm4_row().size() + 1) + 1);
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+  expect_error(r, {"line 2", "NUL"});
+  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+}
+
+TEST_F(Cli, DynamicsNamesTheSeparatorOfASemicolonFile) {
+  std::string row = arm4_row();
+  std::replace(row.begin(), row.end(), ',', ';');
+  write("states.csv", row + "\n" + row + "\n");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in states.csv --out out.csv");
+  expect_error(r, {"line 1", "1 field", "expected 3n = 12", "';'"});
+}
+
+TEST_F(Cli, DynamicsEndsAnEndlessLineWithAnError) {
+  // without a bound, reading /dev/zero grows one line until memory runs out (capped here)
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in /dev/zero --out out.csv", "ulimit -v 2000000;");
+  expect_error(r, {"'/dev/zero' line 1", "longer than 1048576 bytes"});
+  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+  expect_no_temporaries();
+}
+
+TEST_F(Cli, DynamicsHintNamesTheDirectTorqueOption) {
+  const fs::path model = write("servo.xml", R"(<mujoco>
+  <worldbody><body pos="0 0 1"><joint name="j" type="hinge" axis="0 1 0"/>
+    <geom type="sphere" size="0.1" mass="1" contype="0" conaffinity="0"/></body></worldbody>
+  <actuator><position name="servo" joint="j" kp="10"/></actuator>
+</mujoco>)");
+  write("states.csv", "0.1,0.2,0.3\n");
+  const Result r = idmpc("dynamics servo.xml --in states.csv --out out.csv");
+  expect_error(r, {"servo", "--direct-torque"});
+  const Result direct = idmpc("dynamics servo.xml --in states.csv --out out.csv --direct-torque");
+  EXPECT_EQ(direct.code, 0) << direct.err;
+}
+
+// ---------------------------------------------------------------------------------------------
+// check: NaN, degenerate gears, unmodeled features, units, newer MuJoCo, huge assets
+
+// a hinge carrying a slide, a motor on each; spliced: <option> attributes, hinge attributes,
+// attributes of the hinge's motor, and MJCF inside <mujoco>
+std::string hinge_slide_mjcf(const std::string& option = "", const std::string& hinge = R"(axis="0 1 0")",
+                             const std::string& motor = "", const std::string& extra = "") {
+  return R"(<mujoco model="hinge_slide">
+  <option timestep="0.001" )" + option + R"(/>
+  )" + extra + R"(
+  <worldbody>
+    <body name="upper" pos="0 0 1">
+      <joint name="shoulder" type="hinge" )" + hinge + R"(/>
+      <geom type="capsule" fromto="0 0 0 0.4 0 0" size="0.04" mass="1" contype="0" conaffinity="0"/>
+      <body name="carriage" pos="0.4 0 0">
+        <joint name="rail" type="slide" axis="1 0 0"/>
+        <geom type="box" size="0.05 0.04 0.03" mass="0.5" contype="0" conaffinity="0"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor name="shoulder_motor" joint="shoulder" )" + motor + R"(/><motor name="rail_motor" joint="rail"/></actuator>
+</mujoco>
+)";
+}
+
+TEST_F(Cli, CheckPassesOnAHingeAndASlide) {
+  write("model.xml", hinge_slide_mjcf());
+  const Result r = idmpc("check model.xml --samples 3");
+  EXPECT_EQ(r.code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("all 15 checks passed"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, CheckGivesSlideJointsInMetresAndNewtons) {
+  write("model.xml", hinge_slide_mjcf());
+  const Result r = idmpc("check model.xml --samples 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::string shoulder, rail;
+  for (const std::string& line : lines_of(r.out)) {
+    if (line.find(" shoulder ") != std::string::npos) shoulder = line;
+    if (line.find(" rail ") != std::string::npos) rail = line;
+  }
+  EXPECT_NE(shoulder.find("q [rad], tau [N m]"), std::string::npos) << shoulder;
+  EXPECT_NE(rail.find("q [m], tau [N]"), std::string::npos) << rail;
+  EXPECT_EQ(rail.find("rad"), std::string::npos) << rail;
+}
+
+TEST_F(Cli, CheckRejectsANanAxisNamingTheJoint) {
+  write("model.xml", hinge_slide_mjcf("", R"(axis="nan 1 0")"));
+  const Result r = idmpc("check model.xml --samples 2");
+  expect_error(r, {"'shoulder'", "axis", "nan"});
+  EXPECT_EQ(r.out.find("checks passed"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, CheckRejectsADenormalGearNamingTheActuator) {
+  for (const std::string gear : {"1e-320", "0"}) {
+    write("model.xml", hinge_slide_mjcf("", R"(axis="0 1 0")", "gear=\"" + gear + "\""));
+    const Result r = idmpc("check model.xml --samples 2");
+    SCOPED_TRACE("gear " + gear);
+    expect_error(r, {"'shoulder_motor'", "gear"});
+    EXPECT_EQ(r.out.find("checks passed"), std::string::npos) << r.out;
+  }
+}
+
+// features `check` lists as unmodeled are switched off in its MuJoCo reference, and it says so
+class CliCheckUnmodeled : public Cli, public ::testing::WithParamInterface<std::pair<std::string, std::string>> {};
+
+TEST_P(CliCheckUnmodeled, IsComparedWithoutIt) {
+  const auto& [model, feature] = GetParam();
+  write("model.xml", model);
+  const Result r = idmpc("check model.xml --samples 3");
+  EXPECT_EQ(r.code, 0) << r.err << r.out;
+  EXPECT_NE(r.out.find("all 15 checks passed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("  - " + feature + " switched off"), std::string::npos) << r.out;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Features, CliCheckUnmodeled,
+    ::testing::Values(
+        std::make_pair(hinge_slide_mjcf(R"(density="1000" viscosity="0.5" wind="1 0 0")"),
+                       std::string("fluid forces (density/viscosity)")),
+        std::make_pair(hinge_slide_mjcf("", R"(axis="0 1 0")", "",
+                                        R"(<tendon><fixed name="spring" stiffness="50" damping="3">
+      <joint joint="shoulder" coef="1"/><joint joint="rail" coef="0.5"/></fixed></tendon>)"),
+                       std::string("tendon springs and dampers"))),
+    [](const auto& info) { return std::string(info.index == 0 ? "fluid" : "tendon_spring"); });
+
+// attributes, values and elements that MuJoCo 2.2 does not know: one line naming them and the
+// version of this build, not the parser's text
+class CliNewerMujoco : public Cli, public ::testing::WithParamInterface<std::pair<std::string, std::string>> {};
+
+TEST_P(CliNewerMujoco, IsNamedInOneLine) {
+  const auto& [model, needle] = GetParam();
+  write("model.xml", model);
+  const Result r = idmpc("check model.xml");
+  expect_error(r, {needle, "needs a newer MuJoCo", "this build uses MuJoCo 2.2"});
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(r.err.find("Schema violation"), std::string::npos) << r.err;
+}
+
+std::string newer_mujoco_name(const ::testing::TestParamInfo<std::pair<std::string, std::string>>& info) {
+  static const std::vector<std::string> names = {"implicitfast", "kv", "replicate"};
+  return names.at(info.index);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Models, CliNewerMujoco,
+    ::testing::Values(std::make_pair(hinge_slide_mjcf(R"(integrator="implicitfast")"), std::string("'implicitfast'")),
+                      std::make_pair(hinge_slide_mjcf("", R"(axis="0 1 0")", R"(kv="2")"), std::string("'kv'")),
+                      std::make_pair(hinge_slide_mjcf("", R"(axis="0 1 0")", "", "<replicate count=\"2\"/>"),
+                                     std::string("<replicate>"))),
+    newer_mujoco_name);
+
+TEST_F(Cli, CheckNamesAMissingMeshFile) {
+  write("model.xml", hinge_slide_mjcf("", R"(axis="0 1 0")", "",
+                                      R"(<compiler meshdir="meshes"/><asset><mesh name="link" file="link.stl"/></asset>)"));
+  const Result r = idmpc("check model.xml");
+  expect_error(r, {"mesh file 'meshes/link.stl' does not exist"});
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+TEST_F(Cli, CheckRefusesAHugeTextureBeforeLoadingIt) {
+  // MuJoCo 2.2 would need ~5 GB for it (or crash inside mj_loadXML); memory capped here
+  write("model.xml", hinge_slide_mjcf("", R"(axis="0 1 0")", "",
+                                      R"(<asset><texture name="sky" type="skybox" builtin="gradient" width="40000" height="40000"/></asset>)"));
+  const Result r = idmpc("check model.xml", "ulimit -v 3000000;");
+  expect_error(r, {"'sky'", "40000x40000", "8192x8192"});
 }
 
 }  // namespace

@@ -3,7 +3,11 @@
 // plant's torque → ctrl scaling.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <initializer_list>
@@ -17,6 +21,7 @@
 #include "idmpc/mujoco/check.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/mjcf_scan.hpp"
 #include "idmpc/mujoco/plant.hpp"
 #include "idmpc/mujoco/reference.hpp"
 #include "support/random_model.hpp"
@@ -176,7 +181,7 @@ TEST_F(ImportTest, UnderActuatedModelIsRejectedNamingTheBareJoint) {
   const mj::ModelPtr m = mj::load_model_from_string(
       chain_mjcf("", R"(<motor name="m0" joint="j0"/><motor name="m2" joint="j2"/>)"));
   expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "under.xml"); },
-                                             {"under-actuated", "'j1'", "link1", "under.xml"});
+                                             {"under-actuated", "'j1'", "link1", "under.xml", "--direct-torque"});
 }
 
 TEST_F(ImportTest, NonMotorActuatorIsRejectedUnlessTorquesAreDirect) {
@@ -184,7 +189,7 @@ TEST_F(ImportTest, NonMotorActuatorIsRejectedUnlessTorquesAreDirect) {
       "", R"(<motor name="m0" joint="j0"/><position name="servo1" joint="j1" kp="20"/>
              <motor name="m2" joint="j2"/>)"));
   expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "servo.xml"); },
-                                             {"servo1", "motor", "servo.xml"});
+                                             {"servo1", "motor", "servo.xml", "--direct-torque"});
   const mj::ImportedModel imported = mj::import_model(m.get(), "servo.xml", mj::ImportOptions{true});
   EXPECT_TRUE(imported.actuation.direct);
   EXPECT_EQ(imported.model.n, 3);
@@ -544,6 +549,188 @@ TEST_F(ImportTest, PlantWithMixedGainsAndGearsScalesCtrl) {
   const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml");
   ASSERT_FALSE(imported.actuation.direct);
   expect_plant_applies_torques(m.get(), imported.actuation, "mixed gains and gears");
+}
+
+// ---------------------------------------------------------------------------------------------
+// hostile models: non-finite numbers, degenerate gears, newer MuJoCo, missing and huge assets
+
+TEST_F(ImportTest, NonFiniteAxisIsRejectedNamingTheJoint) {
+  std::string xml = chain_mjcf("", "");
+  xml.replace(xml.find(R"(axis="1 0.3 0.1")"), 16, R"(axis="nan 1 0")");
+  const mj::ModelPtr m = mj::load_model_from_string(xml);
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "nan.xml"); },
+                                             {"'j1'", "link1", "axis", "nan", "nan.xml"});
+  // MuJoCo itself only warns
+  const std::vector<std::string> warnings = mj::take_warnings();
+  ASSERT_EQ(warnings.size(), 1u) << joined(warnings);
+  EXPECT_NE(warnings[0].find("NaN"), std::string::npos) << warnings[0];
+}
+
+TEST_F(ImportTest, DenormalZeroAndNonFiniteGearsAreRejectedNamingTheActuator) {
+  for (const std::string gear : {"1e-320", "1e-13", "0", "-1e-300"}) {
+    SCOPED_TRACE("gear " + gear);
+    const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+        "", R"(<motor name="m0" joint="j0"/><motor name="tiny" joint="j1" gear=")" + gear +
+                R"("/><motor name="m2" joint="j2"/>)"));
+    expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "gear.xml"); },
+                                               {"'tiny'", "gear", "1e-12", "gear.xml"});
+  }
+  // a small but sane gear is fine, and so are torques applied directly
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor joint="j0" gear="1e-3"/><motor joint="j1" gear="-2e-6"/><motor joint="j2"/>)"));
+  EXPECT_NO_THROW(mj::import_model(m.get(), "small_gear.xml"));
+}
+
+TEST_F(ImportTest, RelativeErrorOfNonFiniteValuesIsNan) {
+  VecX<double> x = VecX<double>::Ones(3), y = VecX<double>::Ones(3);
+  EXPECT_EQ(mj::relative_error(x, y), 0.0);
+  for (const double bad : {NAN, INFINITY}) {
+    x[1] = bad;
+    EXPECT_TRUE(std::isnan(mj::relative_error(x, y))) << bad;
+    EXPECT_TRUE(std::isnan(mj::relative_error(y, x))) << bad;
+  }
+}
+
+TEST_F(ImportTest, ACheckEntryKeepsANanErrorAndFails) {
+  mj::CheckEntry e{"quantity", 0, 1e-10};
+  e.record(1e-12);
+  EXPECT_TRUE(e.ok());
+  e.record(NAN);  // std::max(worst, NaN) would keep 1e-12
+  e.record(1e-13);
+  EXPECT_TRUE(std::isnan(e.worst));
+  EXPECT_FALSE(e.ok());
+}
+
+// fluid forces and tendon springs are listed as unmodeled; check_model compares against a MuJoCo
+// without them
+TEST_F(ImportTest, CheckModelComparesWithoutFluidForcesAndTendonSprings) {
+  std::string fluid = chain_mjcf("", "");
+  fluid.replace(fluid.find(R"(<option timestep="0.001">)"), 25,
+                R"(<option timestep="0.001" density="1000" viscosity="0.5" wind="0.5 0 0">)");
+  std::string tendon = chain_mjcf("", "");
+  tendon.insert(tendon.find("<actuator>"), R"(<tendon><fixed name="spring" stiffness="40" damping="2">
+    <joint joint="j0" coef="1"/><joint joint="j2" coef="-0.5"/></fixed></tendon>)");
+  for (const auto& [xml, feature] : {std::make_pair(fluid, std::string("fluid forces (density/viscosity)")),
+                                     std::make_pair(tendon, std::string("tendon springs and dampers"))}) {
+    SCOPED_TRACE(feature);
+    const mj::ModelPtr m = mj::load_model_from_string(xml);
+    const mj::ImportedModel imported = mj::import_model(m.get(), "unmodeled.xml");
+    EXPECT_EQ(mj::reference_simplifications(m.get()), std::vector<std::string>{feature});
+    expect_check_model_ok(m.get(), imported.model, feature);
+  }
+  // the shipped models need no simplification
+  for (const std::string& path : test::shipped_model_paths()) {
+    const mj::ModelPtr m = mj::load_model(path);
+    EXPECT_TRUE(mj::reference_simplifications(m.get()).empty()) << path;
+  }
+}
+
+/// a model file in a fresh directory, removed with it
+class LoaderTest : public ImportTest {
+ protected:
+  void SetUp() override {
+    ImportTest::SetUp();
+    dir_ = ::testing::TempDir() + "idmpc_loader_test_" + std::to_string(::getpid()) + "_" +
+           ::testing::UnitTest::GetInstance()->current_test_info()->name() + "/";
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override {
+    std::filesystem::remove_all(dir_);
+    ImportTest::TearDown();
+  }
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(dir_ + name, std::ios::binary) << text;
+    return dir_ + name;
+  }
+  // chain_mjcf with `assets` (compiler, asset, include elements) inside <mujoco>
+  std::string model_with(const std::string& assets) const {
+    std::string xml = chain_mjcf("", "");
+    xml.insert(xml.find("<default>"), assets + "\n  ");
+    return write("model.xml", xml);
+  }
+  // the message of load_model's exception; "" if it loaded
+  static std::string load_error(const std::string& path) {
+    try {
+      mj::load_model(path);
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    return "";
+  }
+  std::string dir_;
+};
+
+TEST_F(LoaderTest, NewerMujocoAttributesValuesAndElementsAreNamed) {
+  const std::string version = mj_versionString();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {R"(<option integrator="implicitfast"/>)", "value 'implicitfast' (<option>, line 3)"},
+      {R"(<compiler assetdir="assets"/>)", "attribute 'assetdir' (<compiler>, line 3)"},
+      {R"(<replicate count="2"/>)", "element <replicate> (line 3)"}};
+  for (const auto& [assets, needle] : cases) {
+    SCOPED_TRACE(assets);
+    const std::string message = load_error(model_with(assets));
+    for (const std::string& part : {needle, std::string("needs a newer MuJoCo"), "this build uses MuJoCo " + version}) {
+      EXPECT_NE(message.find(part), std::string::npos) << "lacks '" << part << "': " << message;
+    }
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  // a name MuJoCo never had: misspelled or newer
+  std::string xml = chain_mjcf("", R"(<motor joint="j0" gaer="2"/>)");
+  const std::string message = load_error(write("typo.xml", xml));
+  EXPECT_NE(message.find("attribute 'gaer'"), std::string::npos) << message;
+  EXPECT_NE(message.find("misspelled"), std::string::npos) << message;
+}
+
+TEST_F(LoaderTest, MissingMeshAndTextureFilesAreNamed) {
+  std::string message = load_error(model_with(
+      R"(<compiler meshdir="meshes"/><asset><mesh name="hand" file="hand.stl"/></asset>)"));
+  EXPECT_NE(message.find("mesh file '" + dir_ + "meshes/hand.stl' does not exist"), std::string::npos) << message;
+  EXPECT_NE(message.find("'hand'"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  message = load_error(model_with(R"(<asset><texture name="wood" type="2d" file="textures/wood.png"/></asset>)"));
+  EXPECT_NE(message.find("texture file '" + dir_ + "textures/wood.png' does not exist"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+}
+
+TEST_F(LoaderTest, HugeTexturesAndHeightFieldsAreRefusedBeforeLoading) {
+  // 9000² pixels: above the bound, still small enough for MuJoCo to load without it
+  std::string message = load_error(
+      model_with(R"(<asset><texture name="sky" type="skybox" builtin="gradient" width="9000" height="9000"/></asset>)"));
+  for (const std::string part : {"'sky'", "9000x9000", "8192x8192", "line 3"}) {
+    EXPECT_NE(message.find(part), std::string::npos) << "lacks '" << part << "': " << message;
+  }
+  // in an included file
+  write("big_asset.xml", R"(<mujoco><asset>
+  <texture name="floor" type="2d" builtin="checker" width="100000" height="100000"/>
+</asset></mujoco>)");
+  message = load_error(model_with(R"(<include file="big_asset.xml"/>)"));
+  EXPECT_NE(message.find("'floor'"), std::string::npos) << message;
+  EXPECT_NE(message.find("big_asset.xml line 2"), std::string::npos) << message;
+  // a PNG whose header claims 40000 x 40000 pixels
+  std::string png("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x9c\x40\0\0\x9c\x40\x08\x02\0\0\0", 29);
+  write("huge.png", png);
+  message = load_error(model_with(R"(<asset><texture name="photo" type="2d" file="huge.png"/></asset>)"));
+  EXPECT_NE(message.find("'photo'"), std::string::npos) << message;
+  EXPECT_NE(message.find("40000x40000"), std::string::npos) << message;
+  // a height field
+  message = load_error(model_with(R"(<asset><hfield name="terrain" nrow="20000" ncol="20000" size="1 1 1 1"/></asset>)"));
+  EXPECT_NE(message.find("'terrain'"), std::string::npos) << message;
+  // textures within the bound load
+  EXPECT_EQ(load_error(model_with(
+                R"(<asset><texture name="sky" type="skybox" builtin="gradient" width="512" height="3072"/></asset>)")),
+            "");
+}
+
+TEST_F(LoaderTest, ScannerSkipsCommentsAndCountsLines) {
+  const std::vector<mj::MjcfElement> elements = mj::scan_elements(
+      "<mujoco>\n<!-- <texture width=\"99999\"/> -->\n<asset a = 'x>y' b=\"2\">\n</asset></mujoco>", "f.xml");
+  ASSERT_EQ(elements.size(), 2u);
+  EXPECT_EQ(elements[1].name, "asset");
+  EXPECT_EQ(elements[1].line, 3);
+  EXPECT_EQ(elements[1].get("a"), "x>y");
+  EXPECT_EQ(elements[1].get("b"), "2");
+  EXPECT_EQ(elements[1].get("c", "none"), "none");
 }
 
 }  // namespace

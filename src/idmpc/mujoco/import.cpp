@@ -1,6 +1,7 @@
 #include "idmpc/mujoco/import.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
@@ -11,7 +12,30 @@
 namespace idmpc::mj {
 namespace {
 
+// smallest |gear| (and |gain·gear|) accepted: below it ctrl = τ/(gain·gear) overflows for any
+// torque of interest, and 1e-320 is a denormal
+constexpr double kMinGear = 1e-12;
+
 Vec3<double> vec3(const mjtNum* x) { return Vec3<double>(x[0], x[1], x[2]); }
+
+std::string number(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+
+std::string numbers(const mjtNum* x, int count) {
+  std::string out;
+  for (int k = 0; k < count; ++k) out += (k ? " " : "") + number(x[k]);
+  return out;
+}
+
+bool finite(const mjtNum* x, int count) {
+  for (int k = 0; k < count; ++k) {
+    if (!std::isfinite(x[k])) return false;
+  }
+  return true;
+}
 
 Mat3<double> rotation(const mjtNum* quat) {
   return Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]).normalized().toRotationMatrix();
@@ -35,6 +59,40 @@ std::string joint_label(const mjModel* m, int j) {
          object_name(m, mjOBJ_BODY, m->jnt_bodyid[j]) + "'";
 }
 
+// every number the import reads must be finite: MuJoCo's compiler lets e.g. axis="nan 1 0" pass
+void require_finite(const mjModel* m, const std::string& source) {
+  auto require = [&](bool ok, const std::string& owner, const char* what, const mjtNum* x, int count) {
+    if (!ok) {
+      throw std::invalid_argument(owner + " in '" + source + "' has a non-finite " + what + " (" +
+                                  numbers(x, count) + "): expected finite numbers");
+    }
+  };
+  for (int j = 0; j < m->njnt; ++j) {
+    const std::string owner = joint_label(m, j);
+    require(finite(m->jnt_axis + 3 * j, 3), owner, "axis", m->jnt_axis + 3 * j, 3);
+    require(finite(m->jnt_pos + 3 * j, 3), owner, "position", m->jnt_pos + 3 * j, 3);
+    require(finite(m->jnt_stiffness + j, 1), owner, "stiffness", m->jnt_stiffness + j, 1);
+    const int a = m->jnt_qposadr[j];
+    require(finite(m->qpos0 + a, 1), owner, "reference position", m->qpos0 + a, 1);
+    require(finite(m->qpos_spring + a, 1), owner, "spring reference", m->qpos_spring + a, 1);
+  }
+  for (int i = 0; i < m->nv; ++i) {
+    const std::string owner = joint_label(m, m->dof_jntid[i]);
+    require(finite(m->dof_armature + i, 1), owner, "armature", m->dof_armature + i, 1);
+    require(finite(m->dof_damping + i, 1), owner, "damping", m->dof_damping + i, 1);
+  }
+  for (int b = 1; b < m->nbody; ++b) {
+    const std::string owner = "body '" + object_name(m, mjOBJ_BODY, b) + "'";
+    require(finite(m->body_pos + 3 * b, 3), owner, "position", m->body_pos + 3 * b, 3);
+    require(finite(m->body_quat + 4 * b, 4), owner, "orientation", m->body_quat + 4 * b, 4);
+    require(finite(m->body_mass + b, 1), owner, "mass", m->body_mass + b, 1);
+    require(finite(m->body_ipos + 3 * b, 3), owner, "centre of mass", m->body_ipos + 3 * b, 3);
+    require(finite(m->body_iquat + 4 * b, 4), owner, "inertia frame", m->body_iquat + 4 * b, 4);
+    require(finite(m->body_inertia + 3 * b, 3), owner, "inertia", m->body_inertia + 3 * b, 3);
+  }
+  require(finite(m->opt.gravity, 3), "the model", "gravity", m->opt.gravity, 3);
+}
+
 Actuation import_actuation(const mjModel* m, const std::string& source, const ImportOptions& options) {
   Actuation act;
   constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -47,8 +105,8 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
   for (int u = 0; u < m->nu; ++u) {
     const std::string name = "actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'";
     const std::string hint = " in '" + source +
-                             "': only motor actuators on joints are supported (or use the "
-                             "option that applies torques directly)";
+                             "': only motor actuators on joints are supported (or use "
+                             "--direct-torque to apply joint torques directly)";
     if (m->actuator_trntype[u] != mjTRN_JOINT) {
       throw std::invalid_argument(name + " does not act on a joint" + hint);
     }
@@ -60,9 +118,18 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
                                          "non-fixed gain or a bias such as a position servo)" +
                                   hint);
     }
-    const double gain = m->actuator_gainprm[u * mjNGAIN] * m->actuator_gear[6 * u];
+    // torque = gain·gear·ctrl: a zero, denormal or non-finite factor makes ctrl = τ/(gain·gear)
+    // meaningless
+    const double gear = m->actuator_gear[6 * u], gain = m->actuator_gainprm[u * mjNGAIN] * gear;
+    if (!std::isfinite(gear) || std::abs(gear) < kMinGear) {
+      throw std::invalid_argument(name + " in '" + source + "' has gear " + number(gear) +
+                                  ": expected a finite gear with |gear| >= " + number(kMinGear));
+    }
+    if (!std::isfinite(gain) || std::abs(gain) < kMinGear) {
+      throw std::invalid_argument(name + " in '" + source + "' has gain×gear " + number(gain) +
+                                  ": expected a finite product with |gain×gear| >= " + number(kMinGear));
+    }
     const int dof = m->jnt_dofadr[m->actuator_trnid[2 * u]];
-    if (gain == 0) throw std::invalid_argument(name + " has zero gain×gear in '" + source + "'");
     if (act.actuator_of_dof[dof] >= 0) {
       throw std::invalid_argument(name + " drives " +
                                   joint_label(m, m->actuator_trnid[2 * u]) +
@@ -72,7 +139,6 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
     act.actuator_of_dof[dof] = u;
     act.ctrl_per_torque[dof] = 1.0 / gain;
     // the torque range: control range through gain and gear, force range through the gear
-    const double gear = m->actuator_gear[6 * u];
     auto bound = [&](double a, double b) {
       act.torque_lower[dof] = std::max(act.torque_lower[dof], std::min(a, b));
       act.torque_upper[dof] = std::min(act.torque_upper[dof], std::max(a, b));
@@ -87,7 +153,7 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
       throw std::invalid_argument("model '" + source + "' is under-actuated: " +
                                   joint_label(m, m->dof_jntid[i]) +
                                   " has no motor actuator (expected one motor per joint, or no "
-                                  "actuators at all, or the option that applies torques directly)");
+                                  "actuators at all, or --direct-torque)");
     }
   }
   return act;
@@ -126,6 +192,7 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
     }
   }
   if (m->nv == 0) throw std::invalid_argument("model '" + source + "' has no joints");
+  require_finite(m, source);
   if (m->nq != m->nv) {
     throw std::invalid_argument("model '" + source + "' has nq = " + std::to_string(m->nq) +
                                 " but nv = " + std::to_string(m->nv) + ": expected 1-DoF joints");

@@ -1,11 +1,18 @@
 #include "idmpc/mujoco/load.hpp"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <mutex>
+#include <regex>
+#include <set>
 #include <stdexcept>
 #include <unistd.h>
+
+#include "idmpc/mujoco/mjcf_scan.hpp"
 
 namespace idmpc::mj {
 namespace {
@@ -21,6 +28,92 @@ void throw_error(const char* msg) { throw std::runtime_error(std::string("MuJoCo
 void collect_warning(const char* msg) {
   std::lock_guard<std::mutex> lock(g_warning_mutex);
   warning_list().emplace_back(msg);
+}
+
+// images MuJoCo loads in full (RGB textures, height fields): at most 8192 x 8192 pixels, about
+// 200 MB; larger ones (40000 x 40000 overflows MuJoCo's int sizes) are refused before loading
+constexpr long long kMaxImagePixels = 8192LL * 8192LL;
+
+// MJCF names (attributes, values, elements) that MuJoCo 2.2 does not know and later versions
+// added; Menagerie models use several of them
+const std::set<std::string> kNewerNames = {
+    "implicitfast", "kv", "dampratio", "gravcomp", "actuatorgravcomp", "inheritrange", "actearly",
+    "actdim", "maxhullvert", "assetdir", "eulerdamp", "nsample", "interp", "delay", "replicate",
+    "frame", "flex", "flexcomp", "plugin", "extension", "instance", "attach", "layer"};
+
+long long integer(const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const long long x = std::strtoll(text.c_str(), &end, 10);
+  if (errno == ERANGE) return std::numeric_limits<long long>::max();
+  return x;
+}
+
+void check_render_asset_sizes(const std::vector<MjcfElement>& elements, const std::string& path) {
+  auto refuse = [&](const MjcfElement& e, const std::string& what, long long w, long long h) {
+    throw std::runtime_error("model '" + path + "': <" + e.name + "> '" + e.get("name", "(unnamed)") +
+                             "' (" + e.file + " line " + std::to_string(e.line) + ") " + what + " is " +
+                             std::to_string(w) + "x" + std::to_string(h) + ": expected at most " +
+                             std::to_string(kMaxImagePixels) + " pixels (8192x8192)");
+  };
+  auto too_big = [](long long w, long long h) {
+    // negative sizes are MuJoCo's to report
+    return w > 0 && h > 0 && (w > kMaxImagePixels || h > kMaxImagePixels || w * h > kMaxImagePixels);
+  };
+  for (const MjcfElement& e : elements) {
+    if (e.name == "texture" && e.get("builtin", "none") != "none") {
+      const long long w = integer(e.get("width", "0")), h = integer(e.get("height", "0"));
+      if (too_big(w, h)) refuse(e, "builtin texture", w, h);
+    } else if (e.name == "hfield") {
+      const long long r = integer(e.get("nrow", "0")), c = integer(e.get("ncol", "0"));
+      if (too_big(r, c)) refuse(e, "height field", r, c);
+    }
+  }
+  for (const AssetFile& a : asset_files(elements, path)) {
+    long w = 0, h = 0;
+    if (a.kind == "texture" && png_size(a.resolved, w, h) && too_big(w, h)) {
+      refuse(*a.element, "texture file '" + a.resolved + "'", w, h);
+    }
+  }
+}
+
+// MuJoCo's parser message, turned into one line that says what to do
+std::string explain_load_error(const std::string& raw, const std::vector<MjcfElement>& elements,
+                               const std::string& path) {
+  std::smatch match;
+  std::string where;
+  std::string line;
+  if (std::regex_search(raw, match, std::regex("Element '([^']*)', line ([0-9]+)"))) {
+    where = " (<" + match[1].str() + ">, line " + match[2].str() + ")";
+    line = " (line " + match[2].str() + ")";
+  }
+  const std::string build = std::string("this build uses MuJoCo ") + mj_versionString();
+  const std::regex attribute("unrecognized attribute: '([^']*)'"), keyword("invalid keyword: '([^']*)'");
+  if (std::regex_search(raw, match, attribute) || std::regex_search(raw, match, keyword)) {
+    const std::string name = match[1].str();
+    const bool is_keyword = raw.find("invalid keyword") != std::string::npos;
+    const std::string what = (is_keyword ? "value '" : "attribute '") + name + "'" + where;
+    if (kNewerNames.count(name)) return what + " needs a newer MuJoCo: " + build;
+    return what + " is unknown to MuJoCo " + mj_versionString() +
+           " (this build): misspelled, or from a newer MuJoCo";
+  }
+  if (raw.find("unrecognized element") != std::string::npos &&
+      std::regex_search(raw, match, std::regex("Element '([^']*)'"))) {
+    const std::string name = match[1].str();
+    if (kNewerNames.count(name)) return "element <" + name + ">" + line + " needs a newer MuJoCo: " + build;
+    return "element <" + name + ">" + line + " is unknown to MuJoCo " + mj_versionString() +
+           " (this build): misspelled, or from a newer MuJoCo";
+  }
+  // a missing asset: name the file as MuJoCo looked for it
+  for (const AssetFile& a : asset_files(elements, path)) {
+    std::error_code ec;
+    if (!std::filesystem::exists(a.resolved, ec)) {
+      return a.kind + " file '" + a.resolved + "' does not exist (<" + a.element->name + "> '" +
+             a.element->get("name", "(unnamed)") + "', " + a.element->file + " line " +
+             std::to_string(a.element->line) + ")";
+    }
+  }
+  return raw.empty() ? std::string("unknown MuJoCo error") : raw;
 }
 
 }  // namespace
@@ -45,11 +138,13 @@ ModelPtr load_model(const std::string& path) {
   if (!std::filesystem::exists(path)) {
     throw std::runtime_error("model file '" + path + "' does not exist");
   }
+  // render-only assets MuJoCo would allocate in full: bounded before it sees them
+  const std::vector<MjcfElement> elements = scan_mjcf(path);
+  check_render_asset_sizes(elements, path);
   char error[1024] = "";
   mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
   if (!m) {
-    throw std::runtime_error("cannot load model '" + path + "': " +
-                             (error[0] ? std::string(error) : std::string("unknown MuJoCo error")));
+    throw std::runtime_error("cannot load model '" + path + "': " + explain_load_error(error, elements, path));
   }
   return ModelPtr(m);
 }

@@ -26,8 +26,14 @@ void install_error_handlers();
 /// @brief Warnings MuJoCo raised through mju_warning since the last call (then cleared).
 std::vector<std::string> take_warnings();
 
-/// @brief Loads an MJCF or URDF file; throws std::runtime_error naming the file and MuJoCo's
-/// message if the file is missing or malformed.
+/// @brief Loads an MJCF or URDF file; throws std::runtime_error naming the file and the problem
+/// in one line if the file is missing or malformed: an attribute, value or element of a newer
+/// MuJoCo than this build's (mj_versionString()), a missing mesh or texture file (named as MuJoCo
+/// looks for it), or MuJoCo's own message.
+///
+/// Before MuJoCo parses the file, it and its includes are scanned for images MuJoCo would
+/// allocate in full: a builtin or PNG texture, or a height field, of more than 8192 x 8192 pixels
+/// is refused (such a model would take gigabytes or crash MuJoCo 2.2 inside mj_loadXML).
 ModelPtr load_model(const std::string& path);
 
 /// @brief Loads a model from MJCF text (written to a temporary file); for tests.

@@ -13,10 +13,15 @@ namespace idmpc {
 
 class Gmres {
  public:
-  /// @throws std::invalid_argument if dim < 1 or kmax < 1 (checked before any allocation)
+  /// the Krylov basis V may hold at most this many doubles (1 GiB)
+  static constexpr long long kMaxBasisEntries = 1LL << 27;
+
+  /// @throws std::invalid_argument if dim < 1, kmax < 1, kmax > dim (a Krylov space has at most
+  /// dim dimensions) or the basis V (dim × (kmax + 1) numbers) would exceed kMaxBasisEntries;
+  /// checked before any allocation, and before kmax + 1 is formed
   Gmres(int dim, int kmax)
-      : kmax_(checked(kmax, "kmax must be at least 1, got ")),
-        V_(MatX<double>::Zero(checked(dim, "GMRES dimension must be at least 1, got "), kmax + 1)),
+      : kmax_(checked(dim, kmax)),
+        V_(MatX<double>::Zero(dim, kmax + 1)),
         H_(MatX<double>::Zero(kmax + 1, kmax)),
         g_(VecX<double>::Zero(kmax + 1)),
         cs_(VecX<double>::Zero(kmax)),
@@ -82,9 +87,21 @@ class Gmres {
   double residual_norm() const { return residual_norm_; }
 
  private:
-  static int checked(int value, const char* message) {
-    if (value < 1) throw std::invalid_argument(message + std::to_string(value));
-    return value;
+  static int checked(int dim, int kmax) {
+    if (dim < 1) throw std::invalid_argument("GMRES dimension must be at least 1, got " + std::to_string(dim));
+    if (kmax < 1) throw std::invalid_argument("kmax must be at least 1, got " + std::to_string(kmax));
+    if (kmax > dim) {
+      throw std::invalid_argument("kmax must not exceed the GMRES dimension " + std::to_string(dim) +
+                                  " (n·N, the number of unknowns), got " + std::to_string(kmax));
+    }
+    const long long entries = static_cast<long long>(dim) * (static_cast<long long>(kmax) + 1);
+    if (entries > kMaxBasisEntries) {
+      throw std::invalid_argument("GMRES basis of dimension " + std::to_string(dim) + " × (kmax + 1) = " +
+                                  std::to_string(entries) + " numbers exceeds " +
+                                  std::to_string(kMaxBasisEntries) + " (1 GiB): reduce kmax, got " +
+                                  std::to_string(kmax));
+    }
+    return kmax;
   }
 
   int kmax_;

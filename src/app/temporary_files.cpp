@@ -1,0 +1,98 @@
+#include "app/temporary_files.hpp"
+
+#include <climits>
+#include <csignal>
+#include <cstring>
+#include <mutex>
+#include <pthread.h>
+#include <stdexcept>
+#include <unistd.h>
+
+#include <atomic>
+
+namespace idmpc::app {
+namespace {
+
+// at most this many temporaries at once (a swingup holds two or three)
+constexpr int kSlots = 32;
+constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+
+enum SlotState : int { kFree = 0, kFilling = 1, kLive = 2 };
+
+struct Slot {
+  std::atomic<int> state{kFree};
+  char path[PATH_MAX];
+};
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs lock-free atomics");
+
+// the registry: the handler can reach nothing but statics
+Slot g_slots[kSlots];
+
+extern "C" void remove_temporaries_and_reraise(int sig) {
+  // unlink every live temporary; a slot being filled has no file yet
+  for (Slot& s : g_slots) {
+    if (s.state.load() == kLive) ::unlink(s.path);
+  }
+  // die of the same signal with its default action
+  struct sigaction dfl {};
+  dfl.sa_handler = SIG_DFL;
+  sigemptyset(&dfl.sa_mask);
+  sigaction(sig, &dfl, nullptr);
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, sig);
+  pthread_sigmask(SIG_UNBLOCK, &set, nullptr);
+  raise(sig);
+  _exit(128 + sig);
+}
+
+}  // namespace
+
+void install_temporary_file_cleanup() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    struct sigaction action {};
+    action.sa_handler = remove_temporaries_and_reraise;
+    // a second signal waits until the first one's cleanup is done
+    sigemptyset(&action.sa_mask);
+    for (int sig : kSignals) sigaddset(&action.sa_mask, sig);
+    action.sa_flags = SA_RESTART;
+    for (int sig : kSignals) {
+      struct sigaction old {};
+      if (sigaction(sig, nullptr, &old) != 0) continue;
+      if (old.sa_handler == SIG_IGN) continue;  // e.g. SIGINT of a background job
+      sigaction(sig, &action, nullptr);
+    }
+  });
+}
+
+TemporaryFile::TemporaryFile(const std::string& path) {
+  if (path.size() >= PATH_MAX) {
+    throw std::runtime_error("temporary path longer than PATH_MAX: '" + path + "'");
+  }
+  for (int k = 0; k < kSlots; ++k) {
+    int expected = kFree;
+    if (g_slots[k].state.compare_exchange_strong(expected, kFilling)) {
+      std::memcpy(g_slots[k].path, path.c_str(), path.size() + 1);
+      g_slots[k].state.store(kLive);
+      slot_ = k;
+      return;
+    }
+  }
+  throw std::runtime_error("more than " + std::to_string(kSlots) +
+                           " temporary files at once; cannot register '" + path + "'");
+}
+
+void TemporaryFile::release() {
+  if (slot_ < 0) return;
+  g_slots[slot_].state.store(kFree);
+  slot_ = -1;
+}
+
+int registered_temporary_files() {
+  int live = 0;
+  for (const Slot& s : g_slots) live += s.state.load() == kLive;
+  return live;
+}
+
+}  // namespace idmpc::app
