@@ -6,9 +6,12 @@
 // The cost is rolled out here independently, with only RNEA/ABA from the library.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include "idmpc/dynamics/dynamics.hpp"
 #include "idmpc/dynamics/finite_difference.hpp"
@@ -30,10 +33,41 @@ using test::random_vector;
 // relative (FD on tree.xml, whose light bodies make J strongly nonlinear in u)
 constexpr double kGradientMatch = 1e-6;
 
-// J(U) of DESIGN §4: FD rolls out a_i = FD(q_i, v_i, u_i), ID computes u_i = ID(q_i, v_i, a_i)
+// the bounded joints' data of the augmented cost, computed here from the limits and R (the
+// constraint scale s = R/Δ of torque_limits.hpp); r_d is a parameter of the problem: taken from it
+struct Bounds {
+  std::vector<int> joint;
+  VecX<double> middle, half_range, scale, r_d;
+  int m() const { return static_cast<int>(joint.size()); }
+};
+
+Bounds bounds_of(const TorqueLimits& limits, const VecX<double>& R, const VecX<double>& r_d) {
+  Bounds b;
+  for (Eigen::Index j = 0; j < limits.lower.size(); ++j) {
+    if (std::isfinite(limits.lower[j])) b.joint.push_back(static_cast<int>(j));
+  }
+  const int m = b.m();
+  b.middle.resize(m);
+  b.half_range.resize(m);
+  b.scale.resize(m);
+  for (int k = 0; k < m; ++k) {
+    const int j = b.joint[static_cast<size_t>(k)];
+    b.middle[k] = 0.5 * (limits.upper[j] + limits.lower[j]);
+    b.half_range[k] = 0.5 * (limits.upper[j] - limits.lower[j]);
+    b.scale[k] = R[j] / (limits.upper[j] - limits.lower[j]);
+  }
+  b.r_d = r_d;
+  return b;
+}
+
+// J(U) of DESIGN §4 and §8: FD rolls out a_i = FD(q_i, v_i, u_i), ID computes
+// u_i = ID(q_i, v_i, a_i); the torque cost is ½(u − u_ref)ᵀR(u − u_ref). With torque limits each
+// stage block of U is (input, d, ρ) and the stage adds the Lagrangian's ρᵀ(s∘c) − r_dᵀd, with
+// c_k = (u_j − ū_k)² + d_k² − (Δ_k/2)² for the bounded joints j = joint[k].
 double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, const VecX<double>& q_ref,
-            const VecX<double>& U, VecX<double> q, VecX<double> v, double T, int N) {
-  const int n = model.n;
+            const VecX<double>& u_ref, const Bounds& bounds, const VecX<double>& U, VecX<double> q,
+            VecX<double> v, double T, int N) {
+  const int n = model.n, m = bounds.m(), sd = n + 2 * m;
   const double dtau = T / N;
   auto phi = [&](const VecX<double>& qi, const VecX<double>& vi) {
     const VecX<double> e = qi - q_ref;
@@ -43,20 +77,33 @@ double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, 
   for (int i = 0; i < N; ++i) {
     VecX<double> a(n), u(n);
     if (f == Formulation::kForwardDynamics) {
-      u = U.segment(i * n, n);
+      u = U.segment(i * sd, n);
       a = aba(model, data, q, v, u);
     } else {
-      a = U.segment(i * n, n);
+      a = U.segment(i * sd, n);
       u = rnea(model, data, q, v, a);
     }
-    double L = phi(q, v) + 0.5 * u.dot(w.R.cwiseProduct(u));
+    const VecX<double> e = u - u_ref;
+    double L = phi(q, v) + 0.5 * e.dot(w.R.cwiseProduct(e));
     if (f == Formulation::kInverseDynamics) L += 0.5 * a.dot(w.Qa.cwiseProduct(a));
+    for (int k = 0; k < m; ++k) {
+      const double d = U[i * sd + n + k], rho = U[i * sd + n + m + k];
+      const double du = u[bounds.joint[static_cast<size_t>(k)]] - bounds.middle[k];
+      L += rho * bounds.scale[k] * (du * du + d * d - bounds.half_range[k] * bounds.half_range[k]) -
+           bounds.r_d[k] * d;
+    }
     J += dtau * L;
     const VecX<double> q_next = q + dtau * v;
     v += dtau * a;
     q = q_next;
   }
   return J + phi(q, v);
+}
+
+// the torque that holds q_ref: gravity and springs at rest
+VecX<double> holding_torque(const Model& model, Data& data, const VecX<double>& q_ref) {
+  const VecX<double> zero = VecX<double>::Zero(model.n);
+  return rnea(model, data, q_ref, zero, zero);
 }
 
 // the stage torques u_i = ID(q_i, v_i, a_i) along the explicit-Euler rollout of accelerations A
@@ -100,9 +147,11 @@ TEST_P(OcpGradient, ResidualIsTheScaledGradientOfTheDiscreteCost) {
     VecX<double> F(N * n);
     ocp.residual(U, q0, v0, T, F);
 
+    const VecX<double> u_ref = holding_torque(p.model, data, q_ref);
     const MatX<double> grad = central_difference_jacobian(
         [&](const VecX<double>& X) {
-          return VecX<double>::Constant(1, cost(p.model, data, formulation, w, q_ref, X, q0, v0, T, N));
+          return VecX<double>::Constant(
+              1, cost(p.model, data, formulation, w, q_ref, u_ref, Bounds{}, X, q0, v0, T, N));
         },
         U);
     const VecX<double> expected = grad.row(0).transpose() / (T / N);
@@ -123,6 +172,136 @@ INSTANTIATE_TEST_SUITE_P(
       return file.substr(0, file.size() - 4) + "_" + to_string(std::get<1>(info.param)) + "_" +
              to_string(std::get<2>(info.param));
     });
+
+// Torque limits (DESIGN §8): the residual is the gradient of the augmented cost — the
+// Lagrangian with ρᵀc − r_dᵀd per stage — with respect to every unknown: inputs, dummy inputs and
+// multipliers, F_i = (1/Δτ) ∂J/∂(input_i, d_i, ρ_i). Some joints unbounded, some bounded with
+// the torque of a stage exactly at the bound, the others' limits narrower than the torques;
+// ID adjoint both in SIMD lanes and stage by stage.
+TorqueLimits limits_around(const VecX<double>& Utorque, int n, int N) {
+  const double inf = std::numeric_limits<double>::infinity();
+  TorqueLimits limits{VecX<double>::Constant(n, -inf), VecX<double>::Constant(n, inf)};
+  for (int j = 1; j < n; j += 2) {
+    double lo = inf, hi = -inf;
+    for (int i = 0; i < N; ++i) {
+      lo = std::min(lo, Utorque[i * n + j]);
+      hi = std::max(hi, Utorque[i * n + j]);
+    }
+    // every other bounded joint: its largest torque exactly at the upper bound (d = 0 solves
+    // c there), the others: a range narrower than the torques (c < 0 unreachable, c > 0 seen)
+    if (j % 4 == 1) {
+      limits.lower[j] = lo - 1.0;
+      limits.upper[j] = hi;
+    } else {
+      limits.lower[j] = 0.75 * lo + 0.25 * hi;
+      limits.upper[j] = 0.25 * lo + 0.75 * hi + 1e-3;
+    }
+  }
+  return limits;
+}
+
+constexpr double kExactStepScale = 1e4;
+
+// each part of F against its own scale: the constraint values c (torque²) would hide an error
+// in the input part
+double part_error(const VecX<double>& F, const VecX<double>& expected, int N, int sd, int offset, int size) {
+  double err = 0, scale = 0;
+  for (int i = 0; i < N; ++i) {
+    err = std::max(err, (F.segment(i * sd + offset, size) - expected.segment(i * sd + offset, size)).cwiseAbs().maxCoeff());
+    scale = std::max(scale, expected.segment(i * sd + offset, size).cwiseAbs().maxCoeff());
+  }
+  return err / std::max(scale, 1e-12);
+}
+
+TEST_P(OcpGradient, WithTorqueLimitsResidualIsTheGradientOfTheAugmentedCost) {
+  const auto& [path, formulation, mode] = GetParam();
+  const Problem p = load_problem(path);
+  const int n = p.model.n, N = 6;
+  const double T = 0.3;
+  Data data(p.model);
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    std::mt19937 rng(seed);
+    const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2),
+                       random_vector(rng, n, 1e-3, 1e-2), random_vector(rng, n, 1e-4, 1e-3)};
+    const VecX<double> q_ref = random_vector(rng, n, -0.5, 0.5);
+    const VecX<double> q0 = random_vector(rng, n, -2.0, 2.0), v0 = random_vector(rng, n, -1.0, 1.0);
+    const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
+    const VecX<double> Utorque = torques_of(p.model, data, A, q0, v0, T, N);
+    const TorqueLimits limits = limits_around(Utorque, n, N);
+    for (const bool lanes : {true, false}) {
+      SingleShooting ocp(p.model, formulation, mode, w, q_ref, N, limits);
+      ocp.set_stage_batching(lanes);
+      if (lanes != ocp.stage_batching()) continue;  // lanes: ID adjoint only
+      SCOPED_TRACE("seed " + std::to_string(seed) + (lanes ? ", lanes" : ", stage by stage"));
+      const int m = ocp.problem().m(), sd = ocp.stage_dim();
+      ASSERT_EQ(m, n / 2);
+      ASSERT_EQ(ocp.dim(), N * (n + 2 * m));
+      // dummy inputs from near 0 (the bound reached) to the half range, multipliers of both signs
+      // and of the magnitudes the solution sees (ρ ≈ r_d / 2sd ≈ κΔ/2d)
+      VecX<double> U(N * sd);
+      const Bounds b = bounds_of(limits, w.R, ocp.problem().torque_bounds().r_d());
+      for (int i = 0; i < N; ++i) {
+        U.segment(i * sd, n) = formulation == Formulation::kInverseDynamics ? A.segment(i * n, n)
+                                                                             : Utorque.segment(i * n, n);
+        U.segment(i * sd + n, m) = random_vector(rng, m, 1e-3, 1.0).cwiseProduct(b.half_range);
+        U.segment(i * sd + n + m, m) = random_vector(rng, m, -1.0, 10.0);
+      }
+      VecX<double> F(N * sd);
+      ocp.residual(U, q0, v0, T, F);
+
+      // J is quadratic in d and linear in ρ, where central differences have no truncation error:
+      // differentiated in d/σ and ρ/σ, so that their steps are σ times the default and J's
+      // rounding (ε|J|/step) stays far below their small gradients (r_d ≈ 1e-6 here)
+      const VecX<double> u_ref = holding_torque(p.model, data, q_ref);
+      VecX<double> sigma = VecX<double>::Ones(N * sd);
+      for (int i = 0; i < N; ++i) sigma.segment(i * sd + n, 2 * m).setConstant(kExactStepScale);
+      const MatX<double> grad = central_difference_jacobian(
+          [&](const VecX<double>& X) {
+            const VecX<double> Y = X.cwiseProduct(sigma);
+            return VecX<double>::Constant(1, cost(p.model, data, formulation, w, q_ref, u_ref, b, Y, q0, v0, T, N));
+          },
+          VecX<double>(U.cwiseQuotient(sigma)));
+      const VecX<double> expected = grad.row(0).transpose().cwiseQuotient(sigma) / (T / N);
+      EXPECT_LE(part_error(F, expected, N, sd, 0, n), kGradientMatch) << "inputs";
+      EXPECT_LE(part_error(F, expected, N, sd, n, m), kGradientMatch) << "dummy inputs";
+      EXPECT_LE(part_error(F, expected, N, sd, n + m, m), kGradientMatch) << "multipliers";
+    }
+  }
+}
+
+// u_ref = ID(q_ref, 0, 0) removes the gravity (and spring) offset: at rest at the target, the
+// trajectory that stays there — a = 0 in ID, u = u_ref in FD — is stationary, F = 0, although
+// the holding torque is far from zero.
+// relative to R·u_ref, the residual without the reference: rounding only, measured up to 2e-8
+// (FD on tree.xml, whose light bodies turn the rounding of FD(q_ref, 0, u_ref) into accelerations)
+constexpr double kStationary = 1e-7;
+
+TEST(OcpTorqueReference, RestAtTheTargetUnderGravityIsStationary) {
+  for (const std::string path : {IDMPC_SOURCE_DIR "/mjcf/arm4.xml", IDMPC_SOURCE_DIR "/mjcf/tree.xml",
+                                 IDMPC_SOURCE_DIR "/mjcf/panda.xml"}) {
+    const Problem p = load_problem(path);
+    const int n = p.model.n, N = 10;
+    Data data(p.model);
+    std::mt19937 rng(7);
+    const VecX<double> q_ref = random_vector(rng, n, -1.0, 1.0), zero = VecX<double>::Zero(n);
+    const VecX<double> u_ref = holding_torque(p.model, data, q_ref);
+    ASSERT_GT(u_ref.cwiseAbs().maxCoeff(), 1.0) << path << ": the target must need a holding torque";
+    for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+      for (const DerivativeMode mode : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
+        SCOPED_TRACE(path + " " + to_string(f) + " " + to_string(mode));
+        const OcpWeights w = paper_weights(n, 1e-3);
+        SingleShooting ocp(p.model, f, mode, w, q_ref, N);
+        EXPECT_LE((ocp.problem().cost().u_ref() - u_ref).cwiseAbs().maxCoeff(), 1e-12);
+        VecX<double> U(N * n);
+        for (int i = 0; i < N; ++i) U.segment(i * n, n) = f == Formulation::kForwardDynamics ? u_ref : zero;
+        VecX<double> F(N * n);
+        ocp.residual(U, q_ref, zero, 0.5, F);
+        const double scale = w.R.cwiseProduct(u_ref).cwiseAbs().maxCoeff();
+        EXPECT_LE(F.cwiseAbs().maxCoeff(), kStationary * scale) << F.transpose();
+      }
+    }
+  }
+}
 
 // With Q_a = 0 both problems minimize the same cost, in torques U or in accelerations A, and
 // the rollout maps A ↦ U(A) one to one (u_i = ID(q_i, v_i, a_i)). By the chain rule, at the same

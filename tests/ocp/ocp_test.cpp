@@ -2,7 +2,10 @@
 // the gradient of the discretized cost, and the two formulations agree where they must.
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "idmpc/dynamics/dynamics.hpp"
 #include "idmpc/dynamics/finite_difference.hpp"
@@ -109,6 +112,116 @@ TEST(OcpStageBatching, SimdLanesGiveTheSameResidualAsStageByStage) {
       EXPECT_LE(rel(F1, F2), kSameResidual);
     }
   }
+}
+
+// Torque limits (DESIGN §8) on some joints, others unbounded, torques on both sides of the
+// bounds: matrix and adjoint modes and the SIMD lanes agree with limits as without.
+TorqueLimits some_limits(int n, double bound) {
+  const double inf = std::numeric_limits<double>::infinity();
+  TorqueLimits limits{VecX<double>::Constant(n, -inf), VecX<double>::Constant(n, inf)};
+  for (int j = 0; j < n; j += 3) {
+    limits.lower[j] = -bound;
+    limits.upper[j] = 0.5 * bound;  // ū ≠ 0
+  }
+  return limits;
+}
+
+VecX<double> limited_unknowns(std::mt19937& rng, const OcpProblem& problem, int N, double input) {
+  const int n = problem.n(), m = problem.m(), sd = problem.stage_dim();
+  VecX<double> U(N * sd);
+  for (int i = 0; i < N; ++i) {
+    U.segment(i * sd, n) = random_vector(rng, n, input);
+    U.segment(i * sd + n, m) = random_vector(rng, m, 0.01, 5.0);
+    U.segment(i * sd + n + m, m) = random_vector(rng, m, -1.0, 10.0);
+  }
+  return U;
+}
+
+TEST(OcpTorqueLimits, MatrixAdjointAndLanesGiveTheSameResidual) {
+  for (const std::string name : {"arm4", "tree", "chain32"}) {
+    const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/" + name + ".xml");
+    const int n = p.model.n;
+    const TorqueLimits limits = some_limits(n, 5.0);
+    for (const int N : {1, 7}) {
+      for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+        SCOPED_TRACE(name + " " + to_string(f) + " N=" + std::to_string(N));
+        std::mt19937 rng(static_cast<unsigned>(N));
+        SingleShooting matrix(p.model, f, DerivativeMode::kMatrix, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
+        SingleShooting adjoint(p.model, f, DerivativeMode::kAdjoint, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
+        SingleShooting single(p.model, f, DerivativeMode::kAdjoint, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
+        single.set_stage_batching(false);
+        ASSERT_EQ(adjoint.stage_batching(), f == Formulation::kInverseDynamics);
+        ASSERT_EQ(matrix.problem().m(), (n + 2) / 3);
+        ASSERT_EQ(matrix.dim(), N * (n + 2 * matrix.problem().m()));
+        // FD inputs are torques: ±10 straddles the bounds [−5, 2.5]; ID accelerations of ±5 give
+        // torques on both sides too
+        const VecX<double> U = limited_unknowns(rng, matrix.problem(), N, f == Formulation::kForwardDynamics ? 10.0 : 5.0);
+        const VecX<double> q0 = random_vector(rng, n, 2.0), v0 = random_vector(rng, n, 1.0);
+        VecX<double> F1(matrix.dim()), F2(matrix.dim()), F3(matrix.dim());
+        matrix.residual(U, q0, v0, 0.3, F1);
+        adjoint.residual(U, q0, v0, 0.3, F2);
+        single.residual(U, q0, v0, 0.3, F3);
+        EXPECT_LE(rel(F1, F2), kSameResidual);
+        EXPECT_LE(rel(F3, F2), kSameResidual);
+      }
+    }
+  }
+}
+
+// No limits, or ±∞ on every joint: no dummy inputs, and the residual of today to the bit.
+TEST(OcpTorqueLimits, UnboundedJointsAddNothing) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/tree.xml");
+  const int n = p.model.n, N = 7;
+  const double inf = std::numeric_limits<double>::infinity();
+  const TorqueLimits open{VecX<double>::Constant(n, -inf), VecX<double>::Constant(n, inf)};
+  std::mt19937 rng(5);
+  const VecX<double> U = random_vector(rng, N * n, 5.0), q0 = random_vector(rng, n, 2.0),
+                     v0 = random_vector(rng, n, 1.0);
+  for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    for (const DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
+      SingleShooting none(p.model, f, d, paper_weights(n, 1e-3), VecX<double>::Zero(n), N);
+      SingleShooting unbounded(p.model, f, d, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, open);
+      EXPECT_EQ(none.problem().m(), 0);
+      EXPECT_EQ(unbounded.problem().m(), 0);
+      EXPECT_EQ(unbounded.stage_dim(), n);
+      EXPECT_EQ(unbounded.dim(), N * n);
+      VecX<double> F1(N * n), F2(N * n);
+      none.residual(U, q0, v0, 0.4, F1);
+      unbounded.residual(U, q0, v0, 0.4, F2);
+      EXPECT_EQ(F1, F2);
+    }
+  }
+}
+
+TEST(OcpTorqueLimits, BadLimitsAreRefusedNamingTheJoint) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  auto refused = [&](TorqueLimits limits, const std::string& needle, double R = 1e-4) {
+    SCOPED_TRACE(needle);
+    OcpWeights w = paper_weights(4);
+    w.R[2] = R;
+    try {
+      OcpProblem problem(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, w, VecX<double>::Zero(4), 5,
+                         limits);
+      ADD_FAILURE() << "accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+    }
+  };
+  const TorqueLimits good{VecX<double>::Constant(4, -1.0), VecX<double>::Constant(4, 1.0)};
+  TorqueLimits bad = good;
+  bad.lower.resize(3);
+  refused(bad, "expected 4 each");
+  bad = good;
+  bad.upper[1] = nan;
+  refused(bad, "joint 1");
+  bad = good;
+  bad.upper[2] = inf;  // one-sided
+  refused(bad, "joint 2");
+  bad = good;
+  bad.lower[3] = 1.0;  // lower = upper
+  refused(bad, "joint 3");
+  refused(good, "joint 2 is [-1, 1]: a bounded joint needs R > 0", 0.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <Eigen/SVD>
 #include <random>
 #include <stdexcept>
@@ -342,6 +343,102 @@ TEST(FrozenState, ConvergesToTheContinuationFixedPointNotToZero) {
     EXPECT_LE(balance.norm(), 1e-3 * s.zeta * F.norm());
     EXPECT_LE(solver.solution_rate().norm() * s.dt, 1e-3 * solver.solution().norm());
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// (c') torque limits: the stage block (input, d, ρ) in the initializations and the update
+
+// ±bound on joints 0 and 2 of arm4, joints 1 and 3 unbounded
+TorqueLimits arm4_limits(double bound) {
+  const double inf = std::numeric_limits<double>::infinity();
+  return TorqueLimits{(VecX<double>(4) << -bound, -inf, -bound, -inf).finished(),
+                      (VecX<double>(4) << bound, inf, bound, inf).finished()};
+}
+
+// every stage's torque within its bounds, d > 0 and ρ > 0
+void expect_inside(const SingleShooting& ocp, const VecX<double>& U, const TorqueLimits& limits, double slack) {
+  const int n = ocp.n(), m = ocp.problem().m(), sd = ocp.stage_dim();
+  for (int i = 0; i < ocp.N(); ++i) {
+    SCOPED_TRACE("stage " + std::to_string(i));
+    for (int j : ocp.problem().torque_bounds().joints()) {
+      EXPECT_LE(ocp.torques()(j, i), limits.upper[j] + slack) << "joint " << j;
+      EXPECT_GE(ocp.torques()(j, i), limits.lower[j] - slack) << "joint " << j;
+    }
+    EXPECT_GT(U.segment(i * sd + n, m).minCoeff(), 0.0) << "d";
+    EXPECT_GT(U.segment(i * sd + n + m, m).minCoeff(), 0.0) << "ρ";
+  }
+}
+
+// The zero-horizon Newton with limits the unconstrained one-stage torque violates (random
+// velocities: u ≈ u_ref − R⁻¹M⁻¹Q_v v, hundreds of N m against a 20 N m bound): F = 0 on the whole
+// stage block, with the torque pushed inside (by the dummy weight's barrier, d ≈ r_d/(2sρ)
+// keeps it a little inside the bound) and d, ρ > 0.
+TEST_P(Continuation, ZeroHorizonInitializationWithTorqueLimits) {
+  const auto& [formulation, mode] = GetParam();
+  const Problem p = load_problem(kArm4);
+  const int n = 4, N = 10;
+  const TorqueLimits limits = arm4_limits(20.0);
+  for (unsigned seed = 1; seed <= 5; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    std::mt19937 rng(seed);
+    const VecX<double> q0 = random_vector(rng, n, 2.0), v0 = random_vector(rng, n, 1.0);
+    SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
+    Cgmres solver(ocp, CgmresSettings{});
+    EXPECT_LE(solver.initialize(0.0, q0, v0), kInitResidual);
+    VecX<double> F(ocp.dim());
+    ocp.residual(solver.solution(), q0, v0, 0.0, F);
+    EXPECT_LE(F.norm(), kInitResidual);
+    expect_inside(ocp, solver.solution(), limits, 0.0);
+  }
+}
+
+// With init_full_horizon and an open horizon (α = 0), the initialization solves the N-stage
+// problem itself: from rest far from the target the optimal torques press against the bounds
+// over the first stages. Without limits the same start solves the unconstrained problem.
+constexpr double kFullInitResidual = 1e-8;  // init_tolerance·√dim, met in every case (≤ 3e-10 measured)
+
+TEST_P(Continuation, FullHorizonInitializationWithAndWithoutTorqueLimits) {
+  const auto& [formulation, mode] = GetParam();
+  const Problem p = load_problem(kArm4);
+  const int n = 4, N = 25;
+  const VecX<double> q0 = (VecX<double>(4) << -2.0, 0.3, -0.2, 0.1).finished(), v0 = VecX<double>::Zero(n);
+  CgmresSettings s;
+  s.alpha = 0;
+  s.init_full_horizon = true;
+  for (const bool limited : {false, true}) {
+    SCOPED_TRACE(limited ? "limits" : "no limits");
+    const TorqueLimits limits = limited ? arm4_limits(20.0) : TorqueLimits{};
+    SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
+    Cgmres solver(ocp, s);
+    EXPECT_LE(solver.initialize(0.0, q0, v0), kFullInitResidual);
+    VecX<double> F(ocp.dim());
+    ocp.residual(solver.solution(), q0, v0, s.Tf, F);
+    EXPECT_LE(F.norm(), kFullInitResidual);
+    if (limited) {
+      expect_inside(ocp, solver.solution(), limits, 0.0);
+      // the bound is reached: the first stage's torque on joint 0 within 1 % of it
+      EXPECT_GE(ocp.torques().col(0).cwiseAbs()[0], 0.99 * 20.0);
+    } else {
+      EXPECT_GT(ocp.torques().col(0).cwiseAbs()[0], 20.0);  // the limits above do bind
+    }
+  }
+}
+
+// With limits an update first makes (d, ρ) consistent with the torques at the measured state
+// (one more evaluation of F), then runs as without.
+TEST_P(Continuation, UpdateWithTorqueLimitsCostsKmaxPlusFourEvaluations) {
+  const auto& [formulation, mode] = GetParam();
+  const Problem p = load_problem(kArm4);
+  SingleShooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, arm4_limits(20.0));
+  CgmresSettings s;
+  s.kmax = 5;
+  Cgmres solver(ocp, s);
+  VecX<double> q, v;
+  mid_swing(q, v);
+  solver.initialize(0.5, q, v);
+  ASSERT_TRUE(solver.update(0.5, q, v));
+  EXPECT_EQ(solver.gmres_iterations(), s.kmax);
+  EXPECT_EQ(solver.evaluations(), s.kmax + 4);
 }
 
 // ---------------------------------------------------------------------------------------------

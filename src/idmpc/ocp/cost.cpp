@@ -20,12 +20,17 @@ void check(const VecX<double>& x, Eigen::Index n, const char* what, bool non_neg
 }  // namespace
 
 QuadraticCost::QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n)
-    : w_(std::move(weights)), q_ref_(std::move(q_ref)) {
+    : w_(std::move(weights)), q_ref_(std::move(q_ref)), u_ref_(VecX<double>::Zero(n)) {
   check(q_ref_, n, "q_ref", false);
   check(w_.Qq, n, "weight Qq", true);
   check(w_.Qv, n, "weight Qv", true);
   check(w_.Qa, n, "weight Qa", true);
   check(w_.R, n, "weight R", true);
+}
+
+void QuadraticCost::set_torque_reference(VecX<double> u_ref) {
+  check(u_ref, q_ref_.size(), "torque reference u_ref", false);
+  u_ref_ = std::move(u_ref);
 }
 
 }  // namespace idmpc

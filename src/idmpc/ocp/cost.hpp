@@ -3,7 +3,8 @@
 /// @brief The quadratic costs of DESIGN §4 (paper eqs. 32–34), by their gradients — all the
 /// optimality conditions need:
 ///   φ(q, v)       = ½(q − q_ref)ᵀQ_q(q − q_ref) + ½vᵀQ_v v          (terminal)
-///   L(q, v, a, u) = φ(q, v) + ½aᵀQ_a a + ½uᵀR u                     (stage; Q_a only in ID)
+///   L(q, v, a, u) = φ(q, v) + ½aᵀQ_a a + ½(u − u_ref)ᵀR(u − u_ref)   (stage; Q_a only in ID)
+/// u_ref is the torque that holds the target (DESIGN §8); zero until set.
 
 #include "idmpc/spatial/spatial.hpp"
 
@@ -26,6 +27,9 @@ class QuadraticCost {
   int n() const { return static_cast<int>(q_ref_.size()); }
   const OcpWeights& weights() const { return w_; }
   const VecX<double>& q_ref() const { return q_ref_; }
+  const VecX<double>& u_ref() const { return u_ref_; }
+  /// @brief Sets u_ref (size n, finite; else std::invalid_argument).
+  void set_torque_reference(VecX<double> u_ref);
 
   /// @brief ∂φ/∂q and ∂φ/∂v.
   void terminal_gradient(In q, In v, Out phi_q, Out phi_v) const {
@@ -34,14 +38,14 @@ class QuadraticCost {
   }
   /// @brief The state part of ∂L/∂q and ∂L/∂v (equal to the terminal gradient's form).
   void state_gradient(In q, In v, Out L_q, Out L_v) const { terminal_gradient(q, v, L_q, L_v); }
-  /// @brief ∂L/∂u = R u.
-  void torque_gradient(In u, Out L_u) const { L_u = w_.R.cwiseProduct(u); }
+  /// @brief ∂L/∂u = R(u − u_ref).
+  void torque_gradient(In u, Out L_u) const { L_u = w_.R.cwiseProduct(u - u_ref_); }
   /// @brief ∂L/∂a = Q_a a (inverse-dynamics problem only).
   void acceleration_gradient(In a, Out L_a) const { L_a = w_.Qa.cwiseProduct(a); }
 
  private:
   OcpWeights w_;
-  VecX<double> q_ref_;
+  VecX<double> q_ref_, u_ref_;
 };
 
 }  // namespace idmpc

@@ -24,11 +24,12 @@ DerivativeMode parse_derivative_mode(const std::string& s) {
 }
 
 OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMode mode,
-                       QuadraticCost cost, int N)
+                       QuadraticCost cost, int N, const TorqueLimits& limits)
     : model_(model),
       formulation_(formulation),
       mode_(mode),
       cost_(std::move(cost)),
+      bounds_(limits, cost_.weights().R, cost_.n()),
       N_(N),
       lane_data_(model) {
   const int n = model.n;
@@ -43,6 +44,10 @@ OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMo
   stage_.assign(static_cast<size_t>(N), Data(model));
   for (Vec* x : {&w_, &gq_, &gv_, &lq_, &lv_, &la_}) *x = Vec::Zero(n);
   for (VecX<StagePack>* x : {&ql_, &vl_, &al_, &wl_}) *x = VecX<StagePack>::Zero(n);
+  rl_ = VecX<StagePack>::Zero(bounds_.m());
+  // u_ref = ID(q_ref, 0, 0): the torque that holds the target (DESIGN §8)
+  const Vec zero = Vec::Zero(n);
+  cost_.set_torque_reference(rnea(model_, stage_[0], cost_.q_ref(), zero, zero));
   for (MatX<double>* x : {&gq_all_, &gv_all_, &Mw_all_}) *x = MatX<double>::Zero(n, N);
   lanes_ = lanes_possible();
 }
@@ -61,12 +66,13 @@ void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
   }
 }
 
-// u = ID(q, v, a) and (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w with w = ∂L/∂u, for up to kStageLanes stages
+// u = ID(q, v, a) and (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w with w = ∂(L + ρᵀ(s∘c))/∂u, for up to kStageLanes stages
 // per RNEA; unused lanes repeat the last stage
 void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
-                                      const MatX<double>& v, const MatX<double>& a, MatX<double>& u) {
+                                      const MatX<double>& v, const MatX<double>& a,
+                                      const MatX<double>& rho, MatX<double>& u) {
   assert(lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
-  const int n = model_.n;
+  const int n = model_.n, m = bounds_.m();
   for (int k = 0; k < kStageLanes; ++k) {
     const int i = i0 + std::min(k, count - 1);
     for (int j = 0; j < n; ++j) {
@@ -74,10 +80,17 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
       vl_[j][k] = v(j, i);
       al_[j][k] = a(j, i);
     }
+    for (int j = 0; j < m; ++j) rl_[j][k] = rho(j, i);
   }
   const VecX<StagePack>& tau = rnea(model_, lane_data_, ql_, vl_, al_);
+  // w = R(u − u_ref) + 2s∘ρ∘(u − ū) on the bounded joints
   const VecX<double>& R = cost_.weights().R;
-  for (int j = 0; j < n; ++j) wl_[j] = R[j] * tau[j];
+  const VecX<double>& u_ref = cost_.u_ref();
+  for (int j = 0; j < n; ++j) wl_[j] = R[j] * (tau[j] - u_ref[j]);
+  for (int k = 0; k < m; ++k) {
+    const int j = bounds_.joints()[static_cast<size_t>(k)];
+    wl_[j] += (2.0 * bounds_.scale()[k]) * rl_[k] * (tau[j] - bounds_.middle()[k]);
+  }
   rnea_vjp(model_, lane_data_, wl_);
   for (int k = 0; k < count; ++k) {
     const int i = i0 + k;
@@ -90,54 +103,63 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
   }
 }
 
-void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In lmd_next, In gmm_next,
-                                   Out hq, Out hv, Out hu, bool state) {
+void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In d, In rho, In lmd_next,
+                                   In gmm_next, Out hq, Out hv, Out F, bool state) {
   assert(i >= 0 && i < N_);
-  Data& d = stage_[static_cast<size_t>(i)];
+  Data& data = stage_[static_cast<size_t>(i)];
+  const int n = model_.n, m = bounds_.m();
+  auto hu = F.head(n);
+  // w = ∂(L + ρᵀ(s∘c))/∂u = R(u − u_ref) + 2s∘ρ∘(u − ū) (on the bounded joints)
+  auto torque_gradient = [&] {
+    cost_.torque_gradient(u, w_);
+    bounds_.add_torque_gradient(u, rho, w_);
+  };
   // gq_, gv_: the dynamics' part of ∂H/∂q, ∂H/∂v
   if (formulation_ == Formulation::kInverseDynamics) {
-    // w = ∂L/∂u;  gq = (∂ID/∂q)ᵀw,  gv = (∂ID/∂v)ᵀw;  hu = γ_{i+1} + ∂L/∂a + M w
+    // gq = (∂ID/∂q)ᵀw,  gv = (∂ID/∂v)ᵀw;  hu = γ_{i+1} + ∂L/∂a + M w
     cost_.acceleration_gradient(a, la_);
     if (lanes_) {
       gq_ = gq_all_.col(i);
       gv_ = gv_all_.col(i);
       hu = gmm_next + la_ + Mw_all_.col(i);
     } else if (mode_ == DerivativeMode::kAdjoint) {
-      cost_.torque_gradient(u, w_);
-      rnea_vjp(model_, d, w_);  // rnea at (q, v, a) is in d from stage_dynamics
-      gq_ = d.g_q;
-      gv_ = d.g_v;
-      hu = gmm_next + la_ + d.g_a;
+      torque_gradient();
+      rnea_vjp(model_, data, w_);  // rnea at (q, v, a) is in data from stage_dynamics
+      gq_ = data.g_q;
+      gv_ = data.g_v;
+      hu = gmm_next + la_ + data.g_a;
     } else {
-      // ∂τ/∂q, ∂τ/∂v and M are in d from stage_dynamics
-      cost_.torque_gradient(u, w_);
+      // ∂τ/∂q, ∂τ/∂v and M are in data from stage_dynamics
+      torque_gradient();
       hu = gmm_next + la_;
-      hu.noalias() += d.M * w_;
+      hu.noalias() += data.M * w_;
       if (state) {
-        gq_.noalias() = d.dtau_dq.transpose() * w_;
-        gv_.noalias() = d.dtau_dv.transpose() * w_;
+        gq_.noalias() = data.dtau_dq.transpose() * w_;
+        gv_.noalias() = data.dtau_dv.transpose() * w_;
       }
     }
   } else {
-    // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = ∂L/∂u + μ
-    cost_.torque_gradient(u, w_);
+    // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = w + μ
+    torque_gradient();
     if (mode_ == DerivativeMode::kAdjoint || !state) {
-      const VecX<double>& mu = minv_apply(model_, d, gmm_next);  // ABA factorization of stage i
+      const VecX<double>& mu = minv_apply(model_, data, gmm_next);  // ABA factorization of stage i
       hu = w_ + mu;
       if (state) {
-        rnea(model_, d, q, v, a);
-        rnea_vjp(model_, d, mu);
-        gq_ = -d.g_q;
-        gv_ = -d.g_v;
+        rnea(model_, data, q, v, a);
+        rnea_vjp(model_, data, mu);
+        gq_ = -data.g_q;
+        gv_ = -data.g_v;
       }
     } else {
-      aba_derivatives_after_aba(model_, d, q, v);  // ABA of stage i is in d from stage_dynamics
-      gq_.noalias() = d.da_dq.transpose() * gmm_next;
-      gv_.noalias() = d.da_dv.transpose() * gmm_next;
+      aba_derivatives_after_aba(model_, data, q, v);  // ABA of stage i is in data from stage_dynamics
+      gq_.noalias() = data.da_dq.transpose() * gmm_next;
+      gv_.noalias() = data.da_dv.transpose() * gmm_next;
       hu = w_;
-      hu.noalias() += d.Minv.transpose() * gmm_next;
+      hu.noalias() += data.Minv.transpose() * gmm_next;
     }
   }
+  // ∂H/∂d = −r_d + 2s∘ρ∘d,  ∂H/∂ρ = s∘c
+  if (m > 0) bounds_.dummy_gradients(u, d, rho, F.segment(n, m), F.segment(n + m, m));
   if (!state) return;
   // hq = ∂L/∂q + gq;  hv = ∂L/∂v + λ_{i+1} + gv (the Euler step q_{i+1} = q_i + Δτ v_i)
   cost_.state_gradient(q, v, lq_, lv_);

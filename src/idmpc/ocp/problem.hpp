@@ -14,6 +14,7 @@
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/ocp/cost.hpp"
+#include "idmpc/ocp/torque_limits.hpp"
 #include "idmpc/spatial/pack.hpp"
 
 namespace idmpc {
@@ -34,11 +35,17 @@ class OcpProblem {
   using Out = Eigen::Ref<Vec>;
 
   /// @param N horizon stages (≥ 1): one dynamics workspace each, kept between the sweeps.
+  /// @param limits torque limits (DESIGN §8; default none): each bounded joint adds a dummy
+  /// input and a multiplier to every stage.
+  /// The torque reference of `cost` is set to u_ref = ID(q_ref, 0, 0), the gravity and spring
+  /// torque that holds the target (DESIGN §8). Throws std::invalid_argument on bad sizes,
+  /// weights or limits.
   OcpProblem(const Model& model, Formulation formulation, DerivativeMode mode, QuadraticCost cost,
-             int N);
+             int N, const TorqueLimits& limits = {});
   OcpProblem(const Model& model, Formulation formulation, DerivativeMode mode, OcpWeights weights,
-             Vec q_ref, int N)
-      : OcpProblem(model, formulation, mode, QuadraticCost(std::move(weights), std::move(q_ref), model.n), N) {}
+             Vec q_ref, int N, const TorqueLimits& limits = {})
+      : OcpProblem(model, formulation, mode, QuadraticCost(std::move(weights), std::move(q_ref), model.n), N,
+                   limits) {}
 
   int n() const { return model_.n; }
   int N() const { return N_; }
@@ -47,6 +54,14 @@ class OcpProblem {
   DerivativeMode derivative_mode() const { return mode_; }
   const QuadraticCost& cost() const { return cost_; }
   const OcpWeights& weights() const { return cost_.weights(); }
+  const TorqueBounds& torque_bounds() const { return bounds_; }
+  /// @brief Dummy weight r_d = f × its nominal value (TorqueBounds::set_dummy_weight_factor).
+  void set_dummy_weight_factor(double f) { bounds_.set_dummy_weight_factor(f); }
+  /// @brief m: bounded joints, each with a dummy input and a multiplier per stage.
+  int m() const { return bounds_.m(); }
+  /// @brief Unknowns of one stage: its input (n), dummy inputs d (m), multipliers ρ (m), in
+  /// this order; the stage's block F_i of the residual has the same layout.
+  int stage_dim() const { return model_.n + 2 * bounds_.m(); }
 
   /// @brief Stage i's dynamics at (q, v) with its input: FD a = FD(q, v, u) (ABA); ID
   /// u = ID(q, v, a) (RNEA; in matrix mode with ∂ID/∂q, ∂ID/∂v and M from the same pass).
@@ -62,16 +77,20 @@ class OcpProblem {
   bool stages_in_lanes() const { return lanes_; }
 
   /// @brief Stages i0 … i0 + count − 1 (count ≤ kStageLanes) at once: columns of q, v, a (n × N)
-  /// in, u (n × N) out; the products of each stage are kept for stage_hamiltonian.
+  /// and of the multipliers rho (m × N) in, u (n × N) out; the products of each stage are kept
+  /// for stage_hamiltonian.
   void stage_dynamics_lanes(int i0, int count, const MatX<double>& q, const MatX<double>& v,
-                            const MatX<double>& a, MatX<double>& u);
+                            const MatX<double>& a, const MatX<double>& rho, MatX<double>& u);
 
-  /// @brief Derivatives of stage i's Hamiltonian at its linearization (after stage_dynamics):
-  /// hu = ∂H/∂input, the stage's block F_i of the optimality residual; with `state` also
-  /// hq = ∂H/∂q and hv = ∂H/∂v, so that the Euler costates are λ_i = λ_{i+1} + Δτ hq,
-  /// γ_i = γ_{i+1} + Δτ hv (DESIGN §4). Without `state` (stage 0), hq and hv are untouched.
-  void stage_hamiltonian(int i, In q, In v, In a, In u, In lmd_next, In gmm_next, Out hq, Out hv,
-                         Out hu, bool state);
+  /// @brief Derivatives of stage i's Hamiltonian
+  /// H_i = L(x_i, ·) − r_dᵀd_i + ρ_iᵀ(s∘c(u_i, d_i)) + λ_{i+1}ᵀv_i + γ_{i+1}ᵀa_i (torque_limits.hpp) at its
+  /// linearization (after stage_dynamics), with the dummy inputs d and multipliers ρ (size m):
+  /// F = (∂H/∂input, ∂H/∂d, ∂H/∂ρ) (size stage_dim), the stage's block F_i of the optimality
+  /// residual; with `state` also hq = ∂H/∂q and hv = ∂H/∂v, so that the Euler costates are
+  /// λ_i = λ_{i+1} + Δτ hq, γ_i = γ_{i+1} + Δτ hv (DESIGN §4). Without `state` (stage 0), hq
+  /// and hv are untouched.
+  void stage_hamiltonian(int i, In q, In v, In a, In u, In d, In rho, In lmd_next, In gmm_next,
+                         Out hq, Out hv, Out F, bool state);
 
   /// @brief Terminal costates λ_N = ∂φ/∂q, γ_N = ∂φ/∂v (eqs. 16, 18).
   void terminal_costate(In q, In v, Out lmd, Out gmm) const { cost_.terminal_gradient(q, v, lmd, gmm); }
@@ -81,12 +100,13 @@ class OcpProblem {
   Formulation formulation_;
   DerivativeMode mode_;
   QuadraticCost cost_;
+  TorqueBounds bounds_;
   int N_;
   bool lanes_ = false;
 
   std::vector<Data> stage_;                 ///< one dynamics workspace per stage
   DataTpl<StagePack> lane_data_;            ///< workspace of the stages in lanes
-  VecX<StagePack> ql_, vl_, al_, wl_;       ///< stage inputs packed in lanes
+  VecX<StagePack> ql_, vl_, al_, wl_, rl_;  ///< stage inputs (rl_: multipliers) packed in lanes
   MatX<double> gq_all_, gv_all_, Mw_all_;   ///< per-stage products from the lanes, n × N
   Vec w_, gq_, gv_, lq_, lv_, la_;          ///< stage scratch
 };

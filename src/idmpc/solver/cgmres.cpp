@@ -1,5 +1,6 @@
 #include "idmpc/solver/cgmres.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -14,6 +15,24 @@ namespace {
 
 // a solution or residual this large has left any physical meaning: divergence
 constexpr double kBlowUp = 1e8;
+
+// full-horizon start (init_full_horizon): the horizon grows from 0 in this many steps, each
+// solved by Newton–GMRES from the last; with torque limits the dummy weight starts this many
+// times larger (the bounds then act as a strong barrier, the solution stays well inside) and
+// comes down a decade per solve. Chosen on the Panda reach: with r_d at its nominal value from
+// the start, or the horizon opened in one step, Newton stalls at ‖F‖ ≈ 10–10⁴.
+constexpr int kInitHorizonSteps = 10;
+constexpr int kInitDummyWeightDecades = 4;
+// Krylov dimension of those Newton steps (GMRES from zero, no restart)
+constexpr int kInitKrylov = 200;
+// fraction of the distance to d = 0, ρ = 0 a Newton step may cover
+constexpr double kFractionToBoundary = 0.95;
+// Newton steps are halved down to this before a level is given up
+constexpr double kMinimumStep = 1e-8;
+// a level counts as solved at init_tolerance·√dim, or at this fraction of its initial ‖F‖
+constexpr double kInitRelativeTolerance = 1e-8;
+// a horizon step that Newton cannot solve is halved, down to this fraction of T/kInitHorizonSteps
+constexpr double kInitMinimumHorizonStep = 1.0 / 64;
 
 std::string text(double x) {
   std::ostringstream o;
@@ -55,28 +74,141 @@ Cgmres::Cgmres(SingleShooting& ocp, const CgmresSettings& settings)
 
 double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
                           const Eigen::Ref<const VecX<double>>& v) {
-  const int n = ocp_.n();
+  const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
   const double T = horizon_.length(t);
-  VecX<double> u = VecX<double>::Zero(n), F0(n);
+  const bool full = settings_.init_full_horizon && T > 0;
+  // one stage's unknowns (input, d, ρ): the input starts at zero, ρ = 0 leaves it unconstrained
+  VecX<double> z = VecX<double>::Zero(sd);
+  if (m > 0) {
+    z.segment(n, m) = ocp_.problem().torque_bounds().half_range();
+    ocp_.problem().set_dummy_weight_factor(1.0);
+  }
+  // the full-horizon start grows the horizon from zero
+  const double T0 = full ? 0.0 : T;
   // F_0 of the one-stage problem (every stage sees x)
   auto F_of = [&](const VecX<double>& x) {
-    VecX<double> out(n);
-    ocp_.residual(x, q, v, T, out, 1);
+    VecX<double> out(sd);
+    ocp_.residual(x, q, v, T0, out, 1);
     return out;
   };
-  double norm = 0;
-  // Newton, Jacobian by the library's central differences
-  for (int it = 0; it <= settings_.init_iterations; ++it) {
-    F0 = F_of(u);
-    norm = F0.norm();
-    if (!std::isfinite(norm)) throw std::runtime_error("zero-horizon initialization: non-finite residual");
-    if (norm <= settings_.init_tolerance || it == settings_.init_iterations) break;
-    u -= central_difference_jacobian(F_of, u).partialPivLu().solve(F0);
+  // Newton on the first `size` unknowns (the rest fixed), Jacobian by the library's central
+  // differences; returns ‖F_0‖ of those equations
+  auto newton = [&](int size) {
+    VecX<double> x = z.head(size), F0(size);
+    auto F_head = [&](const VecX<double>& y) {
+      z.head(size) = y;
+      return VecX<double>(F_of(z).head(size));
+    };
+    double norm = 0;
+    for (int it = 0; it <= settings_.init_iterations; ++it) {
+      F0 = F_head(x);
+      norm = F0.norm();
+      if (!std::isfinite(norm)) throw std::runtime_error("zero-horizon initialization: non-finite residual");
+      if (norm <= settings_.init_tolerance || it == settings_.init_iterations) break;
+      x -= central_difference_jacobian(F_head, x).partialPivLu().solve(F0);
+    }
+    z.head(size) = x;
+    return norm;
+  };
+  // the unconstrained input first; with torque limits, then (d, ρ) consistent with its torque
+  // and the whole stage solved (the dummy weight raised for the full-horizon start)
+  double norm = newton(n);
+  if (m > 0) {
+    if (full) ocp_.problem().set_dummy_weight_factor(std::pow(10.0, kInitDummyWeightDecades));
+    F_of(z);
+    ocp_.problem().torque_bounds().consistent_dummy(ocp_.first_torque(), z.segment(n, m), z.segment(n + m, m));
+    norm = newton(sd);
   }
-  for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * n, n) = u;
+  for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd, sd) = z;
+  if (full) norm = solve_full_horizon(q, v, T);
   Udot_.setZero();
   residual_norm_ = norm;
   return norm;
+}
+
+// horizon continuation 0 → T, then dummy-weight continuation down to nominal; damped
+// Newton–GMRES at each level, (d, ρ) kept positive
+double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
+                                  const Eigen::Ref<const VecX<double>>& v, double T) {
+  const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim(), dim = ocp_.dim();
+  const double h = settings_.h, tolerance = settings_.init_tolerance * std::sqrt(static_cast<double>(dim));
+  Gmres gmres(dim, std::min(dim, kInitKrylov));
+  VecX<double> F(dim), Fw(dim), Uw(dim), dU(dim);
+  double norm = 0;
+
+  // Newton at horizon Tk from U_; true when ‖F‖ reached the tolerance, or 1e-8 of its start
+  auto newton = [&](double Tk) {
+    double start = 0;
+    for (int it = 0; it <= settings_.init_iterations; ++it) {
+      ocp_.residual(U_, q, v, Tk, F);
+      norm = F.norm();
+      if (it == 0) start = norm;
+      if (!std::isfinite(norm)) return false;
+      if (norm <= std::max(tolerance, kInitRelativeTolerance * start)) return true;
+      if (it == settings_.init_iterations) return false;
+      // direction by GMRES on forward-difference products
+      auto apply = [&](const Eigen::Ref<const VecX<double>>& W, Eigen::Ref<VecX<double>> out) {
+        Uw = U_ + h * W;
+        ocp_.residual(Uw, q, v, Tk, Fw);
+        out = (Fw - F) / h;
+      };
+      dU.setZero();
+      gmres.solve(apply, -F, dU);
+      // fraction to the boundary d, ρ > 0, then backtracking on ‖F‖
+      double step = 1;
+      for (int i = 0; i < ocp_.N(); ++i) {
+        for (int j = i * sd + n; j < (i + 1) * sd; ++j) {
+          if (dU[j] < 0) step = std::min(step, -kFractionToBoundary * U_[j] / dU[j]);
+        }
+      }
+      bool descent = false;
+      for (; step > kMinimumStep && !descent; step *= 0.5) {
+        Uw = U_ + step * dU;
+        ocp_.residual(Uw, q, v, Tk, Fw);
+        descent = Fw.allFinite() && Fw.norm() < (1 - 1e-4 * step) * norm;
+      }
+      if (!descent) return false;
+      U_ = Uw;
+    }
+    return false;
+  };
+
+  // the horizon opened in steps of at most T/kInitHorizonSteps, halved where Newton fails
+  const double max_step = T / kInitHorizonSteps, min_step = max_step * kInitMinimumHorizonStep;
+  VecX<double> U_solved = U_;
+  double T_solved = 0, dT = max_step;
+  while (T_solved < T && dT >= min_step) {
+    const double Tk = std::min(T, T_solved + dT);
+    if (newton(Tk)) {
+      T_solved = Tk;
+      U_solved = U_;
+      dT = std::min(2 * dT, max_step);
+    } else {
+      U_ = U_solved;
+      dT *= 0.5;
+    }
+  }
+  if (T_solved < T) newton(T);  // the best Newton can do from the last solved horizon
+  // then a decade less of dummy weight at a time; ρ = r_d / 2sd follows
+  for (int left = m > 0 ? kInitDummyWeightDecades - 1 : -1; left >= 0; --left) {
+    ocp_.problem().set_dummy_weight_factor(std::pow(10.0, left));
+    for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd + n + m, m) *= 0.1;
+    newton(T);
+  }
+  ocp_.residual(U_, q, v, T, F);
+  norm = F.norm();
+  if (!std::isfinite(norm)) throw std::runtime_error("full-horizon initialization: non-finite residual");
+  return norm;
+}
+
+// (d, ρ) of every stage set consistent with the stage torques of the last evaluation
+void Cgmres::synchronize_dummy() {
+  const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
+  for (int i = 0; i < ocp_.N(); ++i) {
+    ocp_.problem().torque_bounds().consistent_dummy(ocp_.torques().col(i), U_.segment(i * sd + n, m),
+                                                    U_.segment(i * sd + n + m, m));
+    Udot_.segment(i * sd + n, 2 * m).setZero();
+  }
 }
 
 bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
@@ -87,8 +219,13 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
   const long evals0 = ocp_.times().evaluations;
   const double h = settings_.h, T = horizon_.length(t), Th = horizon_.length(t + h);
 
-  // F at the measured state, and at the state predicted h ahead with ẋ = (v, a_0)
+  // F at the measured state, and at the state predicted h ahead with ẋ = (v, a_0); with torque
+  // limits, (d, ρ) first made consistent with the torques at the measured state
   ocp_.residual(U_, q, v, T, F_);
+  if (ocp_.problem().m() > 0) {
+    synchronize_dummy();
+    ocp_.residual(U_, q, v, T, F_);
+  }
   residual_norm_ = F_.norm();
   a0_ = ocp_.first_acceleration();
   qh_ = q + h * v;

@@ -22,6 +22,9 @@ struct CgmresSettings {
   double h = 1e-8;     ///< forward-difference increment
   int init_iterations = 50;
   double init_tolerance = 1e-10;
+  /// @brief At a time whose horizon is open (T(t) > 0, e.g. α = 0), initialize solves the
+  /// full N-stage problem (see Cgmres::initialize) instead of copying the one-stage solution.
+  bool init_full_horizon = false;
 
   /// @brief Throws std::invalid_argument naming the first bad setting.
   void validate() const;
@@ -40,12 +43,21 @@ class Cgmres {
   Cgmres(SingleShooting& ocp, const CgmresSettings& settings);
 
   /// @brief Zero-horizon initialization at time t: Newton on the one-stage problem F_0 = 0
-  /// (every stage sees x), copied to all stages. Returns ‖F_0‖ reached.
+  /// (every stage sees x), copied to all stages. With torque limits, Newton first on the input
+  /// alone (ρ = 0), then on the whole stage block from (d, ρ) consistent with that input's
+  /// torque. With settings.init_full_horizon and T(t) > 0, that one-stage solution at T = 0
+  /// starts a continuation: the horizon grown to T(t) in kInitHorizonSteps, then (with limits)
+  /// the dummy weight brought down from 10⁴ × nominal, each level solved by damped
+  /// Newton–GMRES keeping d, ρ > 0. Returns ‖F‖ reached (one stage, or all N stages).
   double initialize(double t, const Eigen::Ref<const VecX<double>>& q,
                     const Eigen::Ref<const VecX<double>>& v);
 
   /// @brief One C/GMRES update at time t from the measured (q, v). Returns false if the
-  /// solution or the residual became non-finite or blew up (divergence).
+  /// solution or the residual became non-finite or blew up (divergence). With torque limits,
+  /// the dummy inputs and multipliers are first made consistent with the stage torques at the
+  /// measured state (TorqueBounds::consistent_dummy, their rates zeroed): one more evaluation
+  /// of F. Without that, d collapses to 0 with ρ → ∞ on joints far from their bounds within
+  /// 0.1–1 s on the Panda reach (a singular point of the constraint), and the loop diverges.
   bool update(double t, const Eigen::Ref<const VecX<double>>& q,
               const Eigen::Ref<const VecX<double>>& v);
 
@@ -55,7 +67,8 @@ class Cgmres {
   /// being tracked, at the measured state).
   double residual_norm() const { return residual_norm_; }
   int gmres_iterations() const { return iterations_; }
-  /// @brief F evaluations in the last update (kmax + 3 unless GMRES stopped early).
+  /// @brief F evaluations in the last update (kmax + 3 unless GMRES stopped early; kmax + 4
+  /// with torque limits).
   int evaluations() const { return evaluations_; }
   const UpdateTimes& last_times() const { return times_; }
   void enable_timing(bool on) { timing_ = on; ocp_.enable_timing(on); }
@@ -64,6 +77,10 @@ class Cgmres {
   double horizon(double t) const { return horizon_.length(t); }
 
  private:
+  double solve_full_horizon(const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
+                            double T);
+  void synchronize_dummy();
+
   SingleShooting& ocp_;
   CgmresSettings settings_;
   Horizon horizon_;

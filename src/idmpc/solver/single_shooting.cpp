@@ -11,13 +11,15 @@ SingleShooting::SingleShooting(OcpProblem problem) : problem_(std::move(problem)
   v_ = MatX<double>::Zero(n, N + 1);
   a_ = MatX<double>::Zero(n, N);
   u_ = MatX<double>::Zero(n, N);
+  d_ = MatX<double>::Zero(problem_.m(), N);
+  rho_ = MatX<double>::Zero(problem_.m(), N);
   for (Vec* x : {&lmd_, &gmm_, &lmd_next_, &gmm_next_, &hq_, &hv_}) *x = Vec::Zero(n);
 }
 
 void SingleShooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int stages) {
   using clock = std::chrono::steady_clock;
-  const int n = problem_.n();
-  assert(stages >= 1 && stages <= N() && U.size() >= stages * n && F.size() >= stages * n);
+  const int n = problem_.n(), m = problem_.m(), sd = problem_.stage_dim();
+  assert(stages >= 1 && stages <= N() && U.size() >= stages * sd && F.size() >= stages * sd);
   const double dtau = T / stages;
   const auto t0 = timing_ ? clock::now() : clock::time_point{};
 
@@ -29,7 +31,11 @@ void SingleShooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, i
   q_.col(0) = q0;
   v_.col(0) = v0;
   for (int i = 0; i < stages; ++i) {
-    input.col(i) = U.segment(i * n, n);
+    input.col(i) = U.segment(i * sd, n);
+    if (m > 0) {
+      d_.col(i) = U.segment(i * sd + n, m);
+      rho_.col(i) = U.segment(i * sd + n + m, m);
+    }
     if (!lanes) problem_.stage_dynamics(i, q_.col(i), v_.col(i), input.col(i), output.col(i));
     q_.col(i + 1) = q_.col(i) + dtau * v_.col(i);
     v_.col(i + 1) = v_.col(i) + dtau * a_.col(i);
@@ -37,7 +43,7 @@ void SingleShooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, i
   // the ID rollout does not depend on u: the stages' dynamics afterwards, kStageLanes at a time
   if (lanes) {
     for (int i0 = 0; i0 < stages; i0 += kStageLanes) {
-      problem_.stage_dynamics_lanes(i0, std::min(kStageLanes, stages - i0), q_, v_, a_, u_);
+      problem_.stage_dynamics_lanes(i0, std::min(kStageLanes, stages - i0), q_, v_, a_, rho_, u_);
     }
   }
   const auto t1 = timing_ ? clock::now() : t0;
@@ -47,8 +53,8 @@ void SingleShooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, i
   problem_.terminal_costate(q_.col(stages), v_.col(stages), lmd_next_, gmm_next_);
   for (int i = stages - 1; i >= 0; --i) {
     const bool state = i > 0;
-    problem_.stage_hamiltonian(i, q_.col(i), v_.col(i), a_.col(i), u_.col(i), lmd_next_, gmm_next_,
-                               hq_, hv_, F.segment(i * n, n), state);
+    problem_.stage_hamiltonian(i, q_.col(i), v_.col(i), a_.col(i), u_.col(i), d_.col(i), rho_.col(i),
+                               lmd_next_, gmm_next_, hq_, hv_, F.segment(i * sd, sd), state);
     if (!state) break;
     lmd_ = lmd_next_ + dtau * hq_;
     gmm_ = gmm_next_ + dtau * hv_;
