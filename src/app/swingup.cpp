@@ -74,13 +74,16 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   ResolvedTask r = resolve(task, n);
   if (r.q0.size() == 0) r.q0 = mj::keyframe_qpos(m.get(), task.q0_rule, task.model);
 
-  Controller controller(OcpProblem(model, r.formulation, r.derivatives, r.weights, r.qref, task.N), r.cgmres);
-  controller.nlp().set_stage_batching(task.simd_stages);
-  // the actuators' ranges, narrowed by the task's limit
+  // the actuators' ranges, narrowed by the task's limit: constraints of the OCP (DESIGN §8)
+  // and the clamp of every torque the plant receives
   const VecX<double> lower = imported.actuation.torque_lower.cwiseMax(-r.torque_limit);
   const VecX<double> upper = imported.actuation.torque_upper.cwiseMin(r.torque_limit);
-  controller.set_torque_limits(lower, upper);
   const bool limited = (lower.array().isFinite() || upper.array().isFinite()).any();
+  const TorqueLimits limits = limited ? TorqueLimits{lower, upper} : TorqueLimits{};
+  Controller controller(OcpProblem(model, r.formulation, r.derivatives, r.weights, r.qref, task.N, limits),
+                        r.cgmres);
+  controller.nlp().set_stage_batching(task.simd_stages);
+  controller.set_torque_limits(lower, upper);
   mj::Plant plant(m.get(), imported.actuation);
   // what the run does not model or had to change, said before it starts
   std::vector<std::string> warnings;
