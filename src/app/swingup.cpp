@@ -32,6 +32,9 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_option("--zeta", t.zeta, "C/GMRES stabilization (0: 1/dt)"), [](const Task& s, Task& d) { d.zeta = s.zeta; });
   add(sub.add_option("--h", t.h, "forward-difference increment of the Frechet products"),
       [](const Task& s, Task& d) { d.h = s.h; });
+  add(sub.add_option("--init-full-horizon", t.init_full_horizon,
+                     "true: solve the full-horizon problem at t = 0 before the loop (with --alpha 0)"),
+      [](const Task& s, Task& d) { d.init_full_horizon = s.init_full_horizon; });
   add(sub.add_option("--duration", t.duration, "simulated time [s]"),
       [](const Task& s, Task& d) { d.duration = s.duration; });
   add(sub.add_option("--q0", t.q0, "initial joint positions, one per joint"), [](const Task& s, Task& d) {
@@ -142,6 +145,7 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   s.torque_upper.assign(upper.data(), upper.data() + n);
   s.saturated_steps = result.saturated_steps;
   s.saturated_any = result.saturated_any;
+  s.max_constraint_violation = result.max_constraint_violation;
   return SwingupOutcome{std::move(result), std::move(s)};
 }
 
@@ -171,6 +175,11 @@ std::string human_summary(const RunSummary& s) {
     o << "  torque saturated on " << s.saturated_any << " of " << s.steps << " steps (per joint:";
     for (long k : s.saturated_steps) o << ' ' << k;
     o << ")\n";
+  }
+  if (std::isfinite(s.max_constraint_violation) && s.max_constraint_violation > 0) {
+    o << "  the OCP's torques left their bounds by up to " << s.max_constraint_violation << " N m\n";
+  } else if (!std::isfinite(s.max_constraint_violation)) {
+    o << "  the OCP's torques became non-finite\n";
   }
   return o.str();
 }

@@ -63,8 +63,10 @@ TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
   TempDir dir;
   const std::string path = dir.write("mine.json", R"({
     "model": "robots/my_arm.xml", "q0": [0.1, 0.2], "qref": [1, 2], "formulation": "fd",
-    "weights": {"R": [0.01, 0.02]}, "cgmres": {"N": 10}})");
+    "weights": {"R": [0.01, 0.02]}, "cgmres": {"N": 10, "alpha": 0, "init_full_horizon": true}})");
   const Task t = load_task(path);
+  EXPECT_TRUE(t.init_full_horizon);
+  EXPECT_FALSE(paper_task().init_full_horizon);  // the paper grows its horizon from zero
   EXPECT_EQ(fs::path(t.model), fs::path(path).parent_path() / "robots/my_arm.xml");
   EXPECT_EQ(t.formulation, "fd");
   EXPECT_EQ(t.N, 10);
@@ -74,6 +76,10 @@ TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
   EXPECT_EQ(r.q0, (VecX<double>(2) << 0.1, 0.2).finished());
   EXPECT_EQ(r.weights.R, (VecX<double>(2) << 0.01, 0.02).finished());
   EXPECT_EQ(r.formulation, Formulation::kForwardDynamics);
+  EXPECT_TRUE(r.cgmres.init_full_horizon);
+  EXPECT_EQ(r.cgmres.alpha, 0.0);
+  // and it survives the round trip through a summary's task
+  EXPECT_TRUE(task_from_json(to_json(t), "round trip", Task{}).init_full_horizon);
 }
 
 TEST(TaskFile, BadFilesNameFileAndField) {
@@ -134,11 +140,15 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
   s.torque_upper = {87, std::numeric_limits<double>::infinity(), 1, 1};
   s.saturated_steps = {3, 0, 1, 0};
   s.saturated_any = 4;
+  s.max_constraint_violation = 0.25;
   const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");
   EXPECT_EQ(to_json(back).dump(), to_json(s).dump());
   EXPECT_EQ(back.label(), "C/GMRES (FD, adjoint) N=25 kmax=10");
   EXPECT_TRUE(std::isnan(back.p50_update_ms));
   EXPECT_EQ(back.torque_upper, s.torque_upper);  // unbounded joints survive as null
+  EXPECT_EQ(back.max_constraint_violation, 0.25);
+  s.max_constraint_violation = std::nan("");  // non-finite OCP torques stay visible
+  EXPECT_TRUE(std::isnan(summary_from_json(to_json(s), "x.json").max_constraint_violation));
 
   nlohmann::json other = to_json(s);
   other["schema"] = 99;

@@ -2,6 +2,7 @@
 // the gradient of the discretized cost, and the two formulations agree where they must.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -191,6 +192,24 @@ TEST(OcpTorqueLimits, UnboundedJointsAddNothing) {
       EXPECT_EQ(F1, F2);
     }
   }
+}
+
+// the excess of stage torques over their bounds, per bounded joint only, NaN reported
+TEST(OcpTorqueLimits, ViolationIsTheLargestExcessOverTheBounds) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const TorqueLimits limits{(VecX<double>(3) << -10, -inf, 0).finished(), (VecX<double>(3) << 10, inf, 4).finished()};
+  const TorqueBounds bounds(limits, VecX<double>::Constant(3, 1e-3), 3);
+  MatX<double> u(3, 2);
+  u << 9, -10.5,  // joint 0: inside, then 0.5 below
+      1e6, -1e6,  // joint 1: unbounded
+      4.25, 1;    // joint 2: 0.25 above
+  EXPECT_DOUBLE_EQ(bounds.violation(u), 0.5);
+  u(0, 1) = 0;
+  EXPECT_DOUBLE_EQ(bounds.violation(u), 0.25);
+  u(2, 0) = 2;
+  EXPECT_EQ(bounds.violation(u), 0.0);  // inside everywhere
+  u(2, 1) = std::nan("");
+  EXPECT_TRUE(std::isnan(bounds.violation(u)));
 }
 
 TEST(OcpTorqueLimits, BadLimitsAreRefusedNamingTheJoint) {

@@ -519,6 +519,16 @@ TEST_F(BadSettings, NegativeZetaAndAlpha) {
   expect_refused(s, "alpha");
 }
 
+// the full-horizon start needs a horizon of length Tf at t = 0: with α > 0 it would do nothing
+TEST_F(BadSettings, FullHorizonStartWithAGrowingHorizon) {
+  CgmresSettings s;
+  s.init_full_horizon = true;
+  s.alpha = 1.0;
+  expect_refused(s, "init_full_horizon needs alpha = 0");
+  s.alpha = 0;
+  EXPECT_NO_THROW(s.validate());
+}
+
 TEST_F(BadSettings, HorizonStepsBelowOne) {
   expect_invalid([&] { make_ocp(0); }, "N");
   expect_invalid([&] { make_ocp(-3); }, "N");

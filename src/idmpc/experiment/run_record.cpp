@@ -253,6 +253,9 @@ nlohmann::json to_json(const RunSummary& s) {
   j["torque_upper"] = limits(s.torque_upper);
   j["saturated_steps"] = s.saturated_steps;
   j["saturated_any"] = s.saturated_any;
+  j["max_constraint_violation"] = std::isfinite(s.max_constraint_violation)
+                                      ? nlohmann::json(s.max_constraint_violation)
+                                      : nlohmann::json(nullptr);  // NaN: the OCP's torques were not finite
   return j;
 }
 
@@ -306,6 +309,8 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.torque_upper = limits("torque_upper", std::numeric_limits<double>::infinity());
     s.saturated_steps = j.at("saturated_steps").get<std::vector<long>>();
     s.saturated_any = j.at("saturated_any").get<long>();
+    // absent in summaries written before it existed; null when the torques were not finite
+    if (j.contains("max_constraint_violation")) s.max_constraint_violation = number("max_constraint_violation");
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(where + ": missing or mistyped field (" + e.what() + ")");
   }

@@ -54,6 +54,8 @@ struct RunSummary {
   std::vector<double> torque_lower, torque_upper;  ///< limits the plant's torques were held to
   std::vector<long> saturated_steps;               ///< per joint: steps clamped to a limit
   long saturated_any = 0;                          ///< steps with any joint clamped
+  /// @brief Largest excess of the OCP solution's stage torques over their bounds [N m]
+  double max_constraint_violation = 0;
   std::vector<std::string> unmodeled;
   std::vector<std::string> warnings;  ///< said at the start: unmodeled features, ranges, timestep
 

@@ -161,7 +161,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   }
   if (r.has("cgmres")) {
     const Reader c = r.sub("cgmres");
-    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h"});
+    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h", "init_full_horizon"});
     c.get("N", t.N);
     c.get("kmax", t.kmax);
     c.get("Tf", t.Tf);
@@ -169,6 +169,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
     c.get("dt", t.dt);
     c.get("zeta", t.zeta);
     c.get("h", t.h);
+    c.get("init_full_horizon", t.init_full_horizon);
   }
   return t;
 }
@@ -197,7 +198,7 @@ nlohmann::json to_json(const Task& t) {
   if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
   j["weights"] = {{"Qq", t.Qq}, {"Qv", t.Qv}, {"Qa", t.Qa}, {"R", t.R}, {"Qa_fallback", t.Qa_fallback}};
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
-                 {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}};
+                 {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon}};
   return j;
 }
 
@@ -239,6 +240,7 @@ ResolvedTask resolve(const Task& t, int n) {
   r.cgmres.dt = t.dt;
   r.cgmres.zeta = t.zeta;
   r.cgmres.h = t.h;
+  r.cgmres.init_full_horizon = t.init_full_horizon;
   r.cgmres.validate();
   return r;
 }

@@ -18,7 +18,9 @@
 ///   "torque_limit" |τ_j| ≤ this: a scalar or one per joint (empty: the model's actuator ranges)
 ///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars or one per joint; "Qa_fallback": the Q_a
 ///                  an ID run that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
-///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h"}
+///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
+///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
+///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize)}
 
 #include <string>
 #include <vector>
@@ -48,6 +50,7 @@ struct Task {
   double Qa_fallback = 0;
   int N = 0, kmax = 0;
   double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
+  bool init_full_horizon = false;
 };
 
 /// @brief The paper's swing-up task file shipped with the sources (mjcf/paper_swingup.json).

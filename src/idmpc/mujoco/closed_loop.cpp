@@ -65,6 +65,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     if (reason.empty()) {
       result.update_ms.push_back(ms);
       residual_sum += controller.residual_norm();
+      result.max_constraint_violation = std::max(result.max_constraint_violation, controller.constraint_violation());
       const UpdateTimes& ph = controller.solver().last_times();
       phase_sum.total += ph.total;
       phase_sum.rollout += ph.rollout;
@@ -100,8 +101,9 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   result.mean_residual = residual_sum / m;
   result.mean_phase_ms = UpdateTimes{1e3 * phase_sum.total / m, 1e3 * phase_sum.rollout / m,
                                      1e3 * phase_sum.costate / m, 1e3 * phase_sum.gmres / m};
-  result.final_q = plant.q();
-  result.final_v = plant.v();
+  // after a divergence the plant may have been reset: the last measured state is the outcome
+  result.final_q = result.diverged ? q : plant.q();
+  result.final_v = result.diverged ? v : plant.v();
   result.final_q_error = (result.final_q - controller.q_ref()).cwiseAbs().maxCoeff();
   result.final_v_norm = result.final_v.norm();
   return result;

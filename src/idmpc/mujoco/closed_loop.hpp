@@ -46,7 +46,12 @@ struct RunResult {
   std::vector<std::string> warnings;  ///< e.g. the model's timestep replaced
   std::vector<long> saturated_steps;  ///< per joint: steps whose applied torque was clamped
   long saturated_any = 0;           ///< steps with at least one clamped joint
-  double final_q_error = 0;         ///< max |q_i − q_ref,i| at the end
+  /// @brief Largest Controller::constraint_violation over the updates [N m]: how far the OCP's
+  /// own solution left the torque bounds (the plant's torques are clamped regardless).
+  double max_constraint_violation = 0;
+  /// @brief max |q_i − q_ref,i| at the end; after a divergence, of the last measured state
+  /// (before MuJoCo's reset of a blown-up simulation)
+  double final_q_error = 0;
   double final_v_norm = 0;
 };
 

@@ -64,4 +64,17 @@ void TorqueBounds::consistent_dummy(In u, Out d, Out rho) const {
   }
 }
 
+double TorqueBounds::violation(const Eigen::Ref<const MatX<double>>& u) const {
+  double worst = 0;
+  for (int k = 0; k < m(); ++k) {
+    const int j = joint_[static_cast<size_t>(k)];
+    for (Eigen::Index i = 0; i < u.cols(); ++i) {
+      // NaN compares false: a non-finite torque is reported as such, not dropped
+      const double excess = std::abs(u(j, i) - middle_[k]) - half_range_[k];
+      if (!(excess <= worst)) worst = excess;
+    }
+  }
+  return worst;
+}
+
 }  // namespace idmpc

@@ -86,6 +86,10 @@ class TorqueBounds {
   /// by more than that, ∂H/∂ρ = 0; both d and ρ > 0.
   void consistent_dummy(In u, Out d, Out rho) const;
 
+  /// @brief How far the torques u (n × stages, one column per stage) leave the bounds: the
+  /// largest max(u_j − u_max,j, u_min,j − u_j, 0) over bounded joints and stages [N m].
+  double violation(const Eigen::Ref<const MatX<double>>& u) const;
+
  private:
   std::vector<int> joint_;
   VecX<double> middle_, half_range_, scale_, r_d_nominal_, r_d_;

@@ -59,6 +59,9 @@ void CgmresSettings::validate() const {
   require(h > 0 && std::isfinite(h), "finite-difference increment h must be positive", h);
   require(Tf > 0 && std::isfinite(Tf), "horizon length Tf must be positive", Tf);
   require(alpha >= 0 && std::isfinite(alpha), "horizon growth alpha must be non-negative", alpha);
+  require(!init_full_horizon || alpha == 0,
+          "init_full_horizon needs alpha = 0 (the horizon starts at Tf; with alpha > 0 it starts at zero length)",
+          alpha);
 }
 
 Cgmres::Cgmres(SingleShooting& ocp, const CgmresSettings& settings)
@@ -227,6 +230,7 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
     ocp_.residual(U_, q, v, T, F_);
   }
   residual_norm_ = F_.norm();
+  constraint_violation_ = ocp_.problem().m() > 0 ? ocp_.problem().torque_bounds().violation(ocp_.torques()) : 0.0;
   a0_ = ocp_.first_acceleration();
   qh_ = q + h * v;
   vh_ = v + h * a0_;

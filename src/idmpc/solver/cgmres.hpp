@@ -66,6 +66,9 @@ class Cgmres {
   /// @brief ‖F(U, x, t)‖ at the start of the last update (the optimality error of the solution
   /// being tracked, at the measured state).
   double residual_norm() const { return residual_norm_; }
+  /// @brief With torque limits: how far the stage torques of the solution being tracked leave
+  /// their bounds at the start of the last update, TorqueBounds::violation [N m] (0 without).
+  double constraint_violation() const { return constraint_violation_; }
   int gmres_iterations() const { return iterations_; }
   /// @brief F evaluations in the last update (kmax + 3 unless GMRES stopped early; kmax + 4
   /// with torque limits).
@@ -88,6 +91,7 @@ class Cgmres {
   bool timing_ = false;
   VecX<double> U_, Udot_, F_, Fx_, Fw_, Uw_, b_, qh_, vh_, a0_;
   double residual_norm_ = 0;
+  double constraint_violation_ = 0;
   int iterations_ = 0;
   int evaluations_ = 0;
   UpdateTimes times_;

@@ -63,6 +63,8 @@ class Controller {
   const Vec& applied_acceleration() const { return a0_hat_; }
   const std::string& failure() const { return failure_; }
   double residual_norm() const { return solver_.residual_norm(); }
+  /// @brief Cgmres::constraint_violation of the last update [N m].
+  double constraint_violation() const { return solver_.constraint_violation(); }
 
  private:
   // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given), then
