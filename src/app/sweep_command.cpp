@@ -224,7 +224,7 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
   return o.str();
 }
 
-CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt, double Qa) {
+CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   Task task = base;
   task.model = opt.models_dir + "/" + c.model;
   task.formulation = c.formulation;
@@ -232,16 +232,17 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt, do
   task.N = c.N;
   task.kmax = c.kmax;
   task.duration = opt.duration;
-  task.Qa = {Qa};
+  task.Qa = {0.0};
   std::string log;
   if (opt.logs) {
     log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.size() - 4) + "_" +
           c.formulation + "_" + c.derivatives + "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) + ".csv";
   }
-  const RunSummary s = run_swingup(task, log).summary;
+  // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
+  const RunSummary s = run_swingup(task, log, true).summary;
   CellResult r;
   r.cell = c;
-  r.Qa = Qa;
+  r.Qa = s.task.Qa.empty() ? 0.0 : s.task.Qa.front();
   r.diverged = s.diverged;
   r.diverged_at = s.diverged ? s.diverged_at : NAN;
   r.mean_ms = s.mean_update_ms;
@@ -286,12 +287,7 @@ void run(const SweepOptions& opt) {
       std::fprintf(stderr, "done earlier\n");
       continue;
     }
-    CellResult r = run_cell(base, c, opt, 0.0);
-    // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
-    if (r.diverged && c.formulation == "id" && base.Qa_fallback > 0) {
-      std::fprintf(stderr, "diverged at %.3f s with Qa = 0, rerun with Qa = %g: ", r.diverged_at, base.Qa_fallback);
-      r = run_cell(base, c, opt, base.Qa_fallback);
-    }
+    const CellResult r = run_cell(base, c, opt);
     std::fprintf(stderr, "%.4g ms per update, %s\n", r.mean_ms,
                  r.diverged ? ("diverged at " + fmt(r.diverged_at) + " s").c_str() : "ok");
     append << csv_row(tables, r) << '\n' << std::flush;

@@ -1,5 +1,6 @@
 #include "app/swingup.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -54,6 +55,8 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_flag("--direct-torque", t.direct_torque,
                    "ignore the model's actuators and apply joint torques directly"),
       [](const Task& s, Task& d) { d.direct_torque = s.direct_torque; });
+  sub.add_flag("--fallback", o.fallback,
+               "ID: if the run diverges with Qa = 0, rerun it with the task's weights.Qa_fallback (the paper's rule)");
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
                    "ID + adjoint: evaluate the horizon stages one by one instead of in SIMD lanes"),
       [](const Task& s, Task& d) { d.simd_stages = s.simd_stages; });
@@ -68,7 +71,9 @@ Task make_task(const TaskOverrides& o) {
   return task;
 }
 
-SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
+namespace {
+
+SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   // validate everything before any output is opened
   const mj::ModelPtr m = mj::load_model(task.model);
   const mj::ImportedModel imported = mj::import_model(m.get(), task.model, mj::ImportOptions{task.direct_torque});
@@ -89,7 +94,7 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   controller.set_torque_limits(lower, upper);
   mj::Plant plant(m.get(), imported.actuation);
   // what the run does not model or had to change, said before it starts
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings = r.warnings;
   if (!imported.unmodeled.empty()) {
     std::string list;
     for (const auto& f : imported.unmodeled) list += (list.empty() ? "" : "; ") + f;
@@ -146,7 +151,26 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path) {
   s.saturated_steps = result.saturated_steps;
   s.saturated_any = result.saturated_any;
   s.max_constraint_violation = result.max_constraint_violation;
+  if (s.diverged) s.divergence_hint = divergence_hint(task);
   return SwingupOutcome{std::move(result), std::move(s)};
+}
+
+}  // namespace
+
+SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback) {
+  SwingupOutcome out = run_once(task, log_path);
+  const bool no_Qa = std::all_of(task.Qa.begin(), task.Qa.end(), [](double x) { return x == 0; });
+  if (!(fallback && out.summary.diverged && task.formulation == "id" && no_Qa && task.Qa_fallback > 0)) return out;
+  // the paper's rule: ID that fails with Q_a = 0 is rerun with the fallback Q_a
+  std::ostringstream said;
+  said << "ID diverged at t = " << out.summary.diverged_at << " s with Qa = 0 (" << out.summary.divergence_reason
+       << "); rerun with Qa = " << task.Qa_fallback << " (weights.Qa_fallback)";
+  std::cerr << "idmpc: warning: " << said.str() << "\n";
+  Task again = task;
+  again.Qa = {task.Qa_fallback};
+  out = run_once(again, log_path);
+  out.summary.warnings.push_back(said.str());
+  return out;
 }
 
 void write_json(const nlohmann::json& j, const std::string& path) {
@@ -162,6 +186,7 @@ std::string human_summary(const RunSummary& s) {
     << ", N = " << s.task.N << ", kmax = " << s.task.kmax << ", " << s.task.duration << " s\n";
   if (s.diverged) {
     o << "  DIVERGED at t = " << s.diverged_at << " s: " << s.divergence_reason << "\n";
+    if (!s.divergence_hint.empty()) o << "  hint: " << s.divergence_hint << "\n";
   } else {
     o << "  completed " << s.steps << " control steps without divergence\n";
   }

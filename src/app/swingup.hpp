@@ -20,6 +20,7 @@ struct TaskOverrides {
   std::string task_file;  ///< --task; empty: the paper's swing-up
   std::string model;      ///< positional MODEL
   Task values;            ///< parsed values, applied where the option was given
+  bool fallback = false;  ///< --fallback: run_swingup's Q_a fallback
   std::vector<std::pair<CLI::Option*, void (*)(const Task&, Task&)>> given;
 };
 
@@ -37,7 +38,9 @@ struct SwingupOutcome {
 
 /// @brief Runs the task; streams the CSV log to `log_path` if non-empty (temporary file
 /// renamed when the run ends, diverged or not). Throws on bad settings before any output.
-SwingupOutcome run_swingup(const Task& task, const std::string& log_path);
+/// With `fallback`, an ID run with Q_a = 0 that diverges is rerun with the task's
+/// weights.Qa_fallback (the paper's rule); the summary's warnings say so, the log is the rerun's.
+SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback = false);
 
 /// @brief Writes JSON to a file atomically.
 void write_json(const nlohmann::json& j, const std::string& path);

@@ -39,7 +39,7 @@ void register_swingup(CLI::App& app) {
     const bool temporary_log = log.empty() && !opt->video.empty();
     if (temporary_log) log = opt->video + ".log." + std::to_string(::getpid()) + ".csv";
     const Task task = make_task(opt->run);
-    SwingupOutcome out = run_swingup(task, log);
+    SwingupOutcome out = run_swingup(task, log, opt->run.fallback);
     if (!opt->summary.empty()) write_json(to_json(out.summary), opt->summary);
     std::cout << human_summary(out.summary);
     if (!opt->log.empty()) std::cout << "  log: " << opt->log << "\n";

@@ -354,14 +354,18 @@ const std::vector<BadInput>& bad_inputs() {
       {"BALL", {"shoulder_ball", "ball"}},
       // kmax + 1 overflowed an int in the GMRES workspace; kmax > n·N is meaningless anyway
       {"--kmax 2147483647", {"kmax", "2147483647", "exceed"}},
-      {"--kmax 101", {"kmax", "101", "100"}}};
+      {"--kmax 101", {"kmax", "101", "100"}},
+      // a problem not strictly convex in its decision variable
+      {"--formulation fd --R 0", {"--R", "positive with FD"}},
+      {"--R 0", {"--R and --Qa", "both 0"}}};
   return inputs;
 }
 
 std::string bad_input_name(const ::testing::TestParamInfo<BadInput>& info) {
   static const std::vector<std::string> names = {"formulation", "derivatives", "N",  "kmax",      "dt",
                                                  "Qq",          "R",           "q0", "ball_joint",
-                                                 "kmax_int_max", "kmax_above_dimension"};
+                                                 "kmax_int_max", "kmax_above_dimension", "fd_R_zero",
+                                                 "id_R_and_Qa_zero"};
   return names.at(info.index);
 }
 
@@ -455,6 +459,58 @@ TEST_F(Cli, SwingupReportsDivergenceWithExitZeroAndKeepsTheLog) {
   EXPECT_EQ(lines.size(), static_cast<size_t>(std::lround(s["diverged_at"].get<double>() / 1e-3) + 2));
   EXPECT_NE(r.out.find("DIVERGED"), std::string::npos) << r.out;
   expect_no_temporaries();
+}
+
+// a start without a finite torque is a divergence at t = 0: reported, hinted, log and summary
+// written (0 rows); settings under which the continuation cannot act are divergences too
+TEST_F(Cli, SwingupReportsDivergencesTheControllerCannotActOn) {
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--R 1e300", "initialization"}, {"--zeta 1e300", "right-hand side"}, {"--h 1e-300", "below the resolution"}};
+  for (const auto& [option, reason] : cases) {
+    SCOPED_TRACE(option);
+    const Result r = idmpc("swingup " + quote(kArm4) + " " + option + " --duration 0.2 --log log.csv --summary s.json");
+    ASSERT_EQ(r.code, 0) << r.err;
+    const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
+    EXPECT_EQ(s["diverged"], true);
+    EXPECT_NE(s["divergence_reason"].get<std::string>().find(reason), std::string::npos) << s["divergence_reason"];
+    EXPECT_EQ(s["divergence_hint"].get<std::string>().rfind("try ", 0), 0u) << s["divergence_hint"];
+    EXPECT_NE(r.out.find("hint: try"), std::string::npos) << r.out;
+    EXPECT_LT(s["diverged_at"].get<double>(), 0.01);
+    EXPECT_GE(lines_of(slurp(dir_ / "log.csv")).size(), 1u);  // the header at least
+    if (option == "--R 1e300") {
+      EXPECT_EQ(s["steps"], 0);
+      EXPECT_EQ(s["diverged_at"], 0.0);
+      EXPECT_DOUBLE_EQ(s["final_q_error"].get<double>(), M_PI);  // the start, not a reset state
+    }
+  }
+}
+
+// the hint names the options that apply to the task; --fallback applies the paper's Q_a rule
+TEST_F(Cli, SwingupFallbackRerunsADivergedIdRunWithTheTasksQa) {
+  const Result plain = idmpc("swingup " + quote(kArm4) + " --R 1e-9 --duration 0.05 --summary a.json");
+  ASSERT_EQ(plain.code, 0) << plain.err;
+  const nlohmann::json a = nlohmann::json::parse(slurp(dir_ / "a.json"));
+  ASSERT_EQ(a["diverged"], true);
+  const std::string hint = a["divergence_hint"];
+  for (const char* option : {"--Qa 0.0001", "--fallback", "--alpha 0 --init-full-horizon true", "--R", "--zeta", "--N"}) {
+    EXPECT_NE(hint.find(option), std::string::npos) << option << " not in: " << hint;
+  }
+  const Result r = idmpc("swingup " + quote(kArm4) + " --R 1e-9 --duration 0.05 --fallback --summary b.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const nlohmann::json b = nlohmann::json::parse(slurp(dir_ / "b.json"));
+  EXPECT_EQ(b["diverged"], false);
+  EXPECT_EQ(b["task"]["weights"]["Qa"], nlohmann::json::array({1e-4}));
+  ASSERT_EQ(b["warnings"].size(), 1u);
+  EXPECT_NE(b["warnings"][0].get<std::string>().find("rerun with Qa = 0.0001"), std::string::npos) << b["warnings"];
+  EXPECT_NE(r.err.find("rerun with Qa"), std::string::npos) << r.err;
+}
+
+TEST_F(Cli, SwingupWarnsThatQaDoesNothingInFd) {
+  const Result r = idmpc("swingup " + quote(kArm4) + " --formulation fd --Qa 1 --duration 0.01 --summary s.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("--Qa (weights.Qa) has no effect with FD"), std::string::npos) << r.err;
+  const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  EXPECT_NE(s["warnings"].dump().find("no effect with FD"), std::string::npos);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -231,6 +231,7 @@ nlohmann::json to_json(const RunSummary& s) {
   j["diverged"] = s.diverged;
   j["diverged_at"] = s.diverged ? nlohmann::json(s.diverged_at) : nlohmann::json(nullptr);
   j["divergence_reason"] = s.divergence_reason;
+  j["divergence_hint"] = s.divergence_hint;
   j["mean_update_ms"] = s.mean_update_ms;
   j["p50_update_ms"] = s.p50_update_ms;
   j["p95_update_ms"] = s.p95_update_ms;
@@ -282,6 +283,7 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.diverged = j.at("diverged").get<bool>();
     if (s.diverged) s.diverged_at = j.at("diverged_at").get<double>();
     s.divergence_reason = j.at("divergence_reason").get<std::string>();
+    s.divergence_hint = j.value("divergence_hint", std::string());
     s.mean_update_ms = j.at("mean_update_ms").get<double>();
     // percentiles of an empty sample are NaN, written as null
     auto number = [&](const char* key) {

@@ -47,6 +47,7 @@ struct RunSummary {
   bool diverged = false;
   double diverged_at = std::numeric_limits<double>::quiet_NaN();
   std::string divergence_reason;
+  std::string divergence_hint;  ///< what to try (divergence_hint(task)), empty unless diverged
   double mean_update_ms = 0, p50_update_ms = 0, p95_update_ms = 0, max_update_ms = 0;
   double rollout_ms = 0, costate_ms = 0, gmres_ms = 0;  ///< mean per update
   int evaluations_per_update = 0;

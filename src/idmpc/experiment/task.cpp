@@ -1,5 +1,6 @@
 #include "idmpc/experiment/task.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,13 @@ namespace idmpc {
 namespace {
 
 using nlohmann::json;
+
+// a number as a user would type it
+std::string text(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
 
 json parse_file(const std::string& path, const char* what) {
   std::ifstream in(path);
@@ -203,7 +211,7 @@ nlohmann::json to_json(const Task& t) {
 }
 
 ResolvedTask resolve(const Task& t, int n) {
-  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}};
+  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}};
   if (t.N < 1) throw std::invalid_argument("N must be at least 1, got " + std::to_string(t.N));
   if (!(t.duration > 0) || !std::isfinite(t.duration)) {
     throw std::invalid_argument("duration must be positive, got " + std::to_string(t.duration));
@@ -214,6 +222,23 @@ ResolvedTask resolve(const Task& t, int n) {
     return non_negative(per_joint(x, n, both), both);
   };
   r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa, "Qa"), weight(t.R, "R")};
+  // the problem must be strictly convex in its decision variable (DESIGN §4–5)
+  const VecX<double>& R = r.weights.R;
+  const VecX<double>& Qa = r.weights.Qa;
+  for (int j = 0; j < n; ++j) {
+    if (r.formulation == Formulation::kForwardDynamics && !(R[j] > 0)) {
+      throw std::invalid_argument("--R (weights.R) must be positive with FD: the torque is the decision "
+                                  "variable and R its only weight; got " + text(R[j]) + " on joint " +
+                                  std::to_string(j));
+    }
+    if (r.formulation == Formulation::kInverseDynamics && !(R[j] + Qa[j] > 0)) {
+      throw std::invalid_argument("--R and --Qa (weights.R, weights.Qa) are both 0 on joint " + std::to_string(j) +
+                                  ": ID needs one of them positive to weight the acceleration");
+    }
+  }
+  if (r.formulation == Formulation::kForwardDynamics && (Qa.array() != 0).any()) {
+    r.warnings.push_back("--Qa (weights.Qa) has no effect with FD: the acceleration is not a decision variable there");
+  }
   r.qref = finite(t.qref.empty() ? VecX<double>::Zero(n) : per_joint(t.qref, n, "--qref (qref)"), "--qref (qref)");
   r.torque_limit = VecX<double>::Constant(n, std::numeric_limits<double>::infinity());
   if (!t.torque_limit.empty()) {
@@ -243,6 +268,29 @@ ResolvedTask resolve(const Task& t, int n) {
   r.cgmres.init_full_horizon = t.init_full_horizon;
   r.cgmres.validate();
   return r;
+}
+
+std::string divergence_hint(const Task& t) {
+  std::vector<std::string> tries;
+  const bool id = t.formulation == "id";
+  const bool no_Qa = std::all_of(t.Qa.begin(), t.Qa.end(), [](double x) { return x == 0; });
+  if (id && no_Qa) {
+    const double Qa = t.Qa_fallback > 0 ? t.Qa_fallback : 1e-4;
+    tries.push_back("--Qa " + text(Qa) + " (a small weight on the accelerations, the paper's fallback" +
+                    std::string(t.Qa_fallback > 0 ? "; `swingup --fallback` reruns with it" : "") + ")");
+  }
+  if (t.alpha > 0 && !t.init_full_horizon) {
+    tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
+                    "growing the horizon from zero)");
+  }
+  auto first = [](const std::vector<double>& x) { return x.empty() ? 0.0 : x.front(); };
+  tries.push_back("a larger --R (now " + text(first(t.R)) + ") for smaller, smoother torques");
+  const double zeta = t.zeta > 0 ? t.zeta : 1.0 / t.dt;
+  tries.push_back("a smaller --zeta (now " + text(zeta) + ")");
+  tries.push_back("a larger --N (now " + std::to_string(t.N) + ") for finer horizon steps");
+  std::string s = "try ";
+  for (size_t k = 0; k < tries.size(); ++k) s += (k ? "; or " : "") + tries[k];
+  return s;
 }
 
 const PaperCell* PaperTables::find(const std::string& table, const std::string& formulation, int n, int N,

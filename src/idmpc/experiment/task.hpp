@@ -77,10 +77,15 @@ struct ResolvedTask {
   VecX<double> torque_limit;  ///< size n, +infinity where the task sets none
   OcpWeights weights;
   CgmresSettings cgmres;
+  std::vector<std::string> warnings;  ///< settings accepted but without effect (e.g. Q_a in FD)
 };
 /// @brief Throws std::invalid_argument naming the field (a scalar or n values expected,
 /// non-negative weights, finite values, valid C/GMRES settings).
 ResolvedTask resolve(const Task& task, int n);
+
+/// @brief What to try after a divergence of this task, as options to change: one line
+/// starting "try ", e.g. a small Q_a for ID, the full-horizon start, a larger R, a smaller ζ.
+std::string divergence_hint(const Task& task);
 
 /// @brief One cell of the paper's Tables 1–3 (mjcf/paper_tables.json).
 struct PaperCell {

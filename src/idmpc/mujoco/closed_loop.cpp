@@ -46,6 +46,17 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   VecX<double> tau = controller.initialize(q, v), tau_cmd = controller.commanded_torque();
   result.init_residual = controller.residual_norm();
   result.saturated_steps.assign(static_cast<size_t>(n), 0);
+  if (!controller.failure().empty()) {
+    // no torque to start with: a divergence at t = 0, nothing applied, nothing logged
+    result.diverged = true;
+    result.diverged_at = 0;
+    result.divergence_reason = controller.failure();
+    result.final_q = q;
+    result.final_v = v;
+    result.final_q_error = (q - controller.q_ref()).cwiseAbs().maxCoeff();
+    result.final_v_norm = v.norm();
+    return result;
+  }
   double residual_sum = 0;
   UpdateTimes phase_sum;
 

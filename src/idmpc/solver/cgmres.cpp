@@ -221,6 +221,7 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
   if (timing_) ocp_.reset_times();
   const long evals0 = ocp_.times().evaluations;
   const double h = settings_.h, T = horizon_.length(t), Th = horizon_.length(t + h);
+  failure_.clear();
 
   // F at the measured state, and at the state predicted h ahead with ẋ = (v, a_0); with torque
   // limits, (d, ρ) first made consistent with the torques at the measured state
@@ -238,14 +239,30 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
 
   // right-hand side b = −ζF − (∂F/∂x ẋ + ∂F/∂t) by forward difference
   b_ = -settings_.zeta * F_ - (Fx_ - F_) / h;
+  if (!(b_.allFinite() && std::isfinite(b_.norm()))) {
+    // GMRES would return U̇ unchanged and the loop would go on without acting
+    failure_ = F_.allFinite() && Fx_.allFinite()
+                   ? "the continuation's right-hand side -zeta F - (F(x + h xdot) - F)/h is not finite (zeta = " +
+                         text(settings_.zeta) + ", h = " + text(h) + ")"
+                   : "the optimality residual F became non-finite";
+    return false;
+  }
 
   // (∂F/∂U) W ≈ [F(U + hW, x + hẋ, t + h) − F(U, x + hẋ, t + h)] / h, warm start from U̇
+  bool vanished = false;
   auto apply = [&](const Eigen::Ref<const VecX<double>>& W, Eigen::Ref<VecX<double>> out) {
     Uw_ = U_ + h * W;
     ocp_.residual(Uw_, qh_, vh_, Th, Fw_);
+    // h·W below the resolution of U or F: the product is 0 and GMRES would report convergence
+    if (Fw_ == Fx_ && !W.isZero(0)) vanished = true;
     out = (Fw_ - Fx_) / h;
   };
   iterations_ = gmres_.solve(apply, b_, Udot_);
+  if (vanished) {
+    failure_ = "the Frechet products (F(U + hW) - F(U))/h vanish: h = " + text(h) +
+               " is below the resolution of U and F (try h = 1e-8)";
+    return false;
+  }
   U_ += settings_.dt * Udot_;
   evaluations_ = static_cast<int>(ocp_.times().evaluations - evals0);
 
@@ -255,8 +272,14 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
     times_.costate = ocp_.times().costate;
     times_.gmres = times_.total - times_.rollout - times_.costate;
   }
-  const bool finite = U_.allFinite() && F_.allFinite() && Udot_.allFinite();
-  return finite && U_.cwiseAbs().maxCoeff() < kBlowUp && residual_norm_ < kBlowUp;
+  if (!(U_.allFinite() && Udot_.allFinite())) {
+    failure_ = "the C/GMRES solution became non-finite";
+  } else if (!(U_.cwiseAbs().maxCoeff() < kBlowUp)) {
+    failure_ = "the C/GMRES solution exceeded 1e8";
+  } else if (!(residual_norm_ < kBlowUp)) {
+    failure_ = "the optimality residual |F| exceeded 1e8";
+  }
+  return failure_.empty();
 }
 
 }  // namespace idmpc

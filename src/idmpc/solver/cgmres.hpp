@@ -61,6 +61,8 @@ class Cgmres {
   bool update(double t, const Eigen::Ref<const VecX<double>>& q,
               const Eigen::Ref<const VecX<double>>& v);
 
+  /// @brief Why the last update returned false (empty after a good one).
+  const std::string& failure() const { return failure_; }
   const VecX<double>& solution() const { return U_; }
   const VecX<double>& solution_rate() const { return Udot_; }
   /// @brief ‖F(U, x, t)‖ at the start of the last update (the optimality error of the solution
@@ -92,6 +94,7 @@ class Cgmres {
   VecX<double> U_, Udot_, F_, Fx_, Fw_, Uw_, b_, qh_, vh_, a0_;
   double residual_norm_ = 0;
   double constraint_violation_ = 0;
+  std::string failure_;
   int iterations_ = 0;
   int evaluations_ = 0;
   UpdateTimes times_;

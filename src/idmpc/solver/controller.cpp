@@ -34,19 +34,31 @@ void Controller::set_torque_limits(const Vec& lower, const Vec& upper) {
 }
 
 const VecX<double>& Controller::initialize(In q, In v) {
-  solver_.initialize(0.0, q, v);
   failure_.clear();
+  try {
+    solver_.initialize(0.0, q, v);
+  } catch (const std::runtime_error& e) {
+    // a non-finite start is a divergence at t = 0, reported like any other
+    failure_ = e.what();
+    tau_cmd_.setConstant(std::numeric_limits<double>::quiet_NaN());
+    tau_.setZero();
+    return tau_;
+  }
   // the state is measured now and the torque applies now: no prediction (Δt = 0)
   const auto a0 = solver_.solution().head(n());
   torque_rule(q, v, a0, 0.0);
   if (nlp_.formulation() == Formulation::kInverseDynamics) a0_hat_ = a0;
+  if (!tau_cmd_.allFinite()) {
+    failure_ = "initialization: non-finite torque";
+    tau_.setZero();
+  }
   return tau_;
 }
 
 bool Controller::update(double t, In q, In v) {
   failure_.clear();
   if (!solver_.update(t, q, v)) {
-    failure_ = "C/GMRES solution or residual became non-finite or exceeded 1e8";
+    failure_ = solver_.failure();
     return false;
   }
   torque_rule(q, v, a0_hat_, dt());

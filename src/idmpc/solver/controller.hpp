@@ -37,8 +37,8 @@ class Controller {
   Cgmres& solver() { return solver_; }
 
   /// @brief Zero-horizon initialization from the measured x(0) = (q, v). Returns τ(0), the
-  /// torque to apply over the first sampling period. Throws std::runtime_error if the
-  /// initialization's residual is non-finite.
+  /// torque to apply over the first sampling period. If the initialization's residual or
+  /// torque is non-finite, failure() says so and the torque is zero (nothing to apply).
   const Vec& initialize(In q, In v);
 
   /// @brief One control update at time t from the measured (q, v). On success returns true
