@@ -1,5 +1,6 @@
 // idmpc sweep: the paper's closed-loop grids (Tables 1–3), resumable, with our figures beside
 // the paper's.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -23,11 +24,17 @@ struct SweepOptions {
   std::string tables = "all";        // 12, 3 or all
   std::string derivatives = "matrix";  // matrix, adjoint or both
   double duration = 10.0;
+  bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
 };
 
+// the real-arm grid: the reach task of every arm in mjcf/arms.json, both formulations
+constexpr const char* kArmsTable = "arms";
+// a reach succeeds when it does not diverge and ends within this of its target (issue 9)
+constexpr double kReachTolerance = 1e-3;
+
 struct Cell {
-  std::string table, model, formulation, derivatives;
+  std::string table, model, formulation, derivatives;  // arms: model is the task file's name
   int n = 0, N = 0, kmax = 0;
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + std::to_string(N) +
@@ -40,6 +47,9 @@ struct CellResult {
   double Qa = 0;
   bool diverged = false;
   double diverged_at = NAN, mean_ms = NAN, p95_ms = NAN, final_q_error = NAN, final_v_norm = NAN;
+  long steps = 0, saturated_steps = 0;   // steps run; steps with a clamped torque
+  double max_violation = NAN;            // of the OCP's torques over their bounds [N m]
+  bool reached() const { return !diverged && final_q_error < kReachTolerance; }
 };
 
 // the paper's figure for a cell (mjcf/paper_tables.json)
@@ -53,6 +63,23 @@ PaperFigure paper_figure(const PaperTables& tables, const Cell& c) {
 }
 
 // the paper's cells, in the file's order, for the chosen tables and derivative modes
+// the real arms' reach tasks (mjcf/arms.json), paths relative to the models directory
+// a file of the models directory (an absolute name stays as it is)
+std::string in_models(const SweepOptions& opt, const std::string& file) {
+  return (std::filesystem::path(opt.models_dir) / file).string();
+}
+
+std::vector<std::string> arm_tasks(const SweepOptions& opt) {
+  const std::string path = opt.models_dir + "/arms.json";
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("'" + path + "' cannot be read (the list of real-arm tasks; see --models)");
+  try {
+    return nlohmann::json::parse(in).at("tasks").get<std::vector<std::string>>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument("'" + path + "': expected {\"tasks\": [task files]}, " + e.what());
+  }
+}
+
 std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
   std::vector<std::string> modes;
   if (opt.derivatives == "both") {
@@ -61,10 +88,19 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
     parse_derivative_mode(opt.derivatives);
     modes = {opt.derivatives};
   }
-  if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all") {
-    throw std::invalid_argument("--tables must be 12, 3 or all, got '" + opt.tables + "'");
+  if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && opt.tables != kArmsTable) {
+    throw std::invalid_argument("--tables must be 12, 3, all or arms, got '" + opt.tables + "'");
   }
   std::vector<Cell> cells;
+  if (opt.tables == kArmsTable) {
+    for (const auto& mode : modes) {
+      for (const std::string& file : arm_tasks(opt)) {
+        const Task t = load_task(in_models(opt, file));
+        for (const char* f : {"fd", "id"}) cells.push_back({kArmsTable, file, f, mode, 0, t.N, t.kmax});
+      }
+    }
+    return cells;
+  }
   for (const auto& mode : modes) {
     for (const PaperCell& p : tables.cells) {
       if (opt.tables != "all" && p.table != opt.tables) continue;
@@ -76,7 +112,8 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
 
 const char* kCsvHeader =
     "table,model,n,formulation,derivatives,N,kmax,Qa,diverged,diverged_at,mean_update_ms,"
-    "p95_update_ms,final_q_error,final_v_norm,paper_ms,paper_note";
+    "p95_update_ms,final_q_error,final_v_norm,paper_ms,paper_note,steps,saturated_steps,"
+    "max_constraint_violation";
 
 std::string csv_row(const PaperTables& tables, const CellResult& r) {
   const PaperFigure p = paper_figure(tables, r.cell);
@@ -84,7 +121,8 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   o << std::setprecision(8) << r.cell.table << ',' << r.cell.model << ',' << r.cell.n << ','
     << r.cell.formulation << ',' << r.cell.derivatives << ',' << r.cell.N << ',' << r.cell.kmax << ','
     << r.Qa << ',' << (r.diverged ? 1 : 0) << ',' << r.diverged_at << ',' << r.mean_ms << ','
-    << r.p95_ms << ',' << r.final_q_error << ',' << r.final_v_norm << ',' << p.ms << ',' << p.note;
+    << r.p95_ms << ',' << r.final_q_error << ',' << r.final_v_norm << ',' << p.ms << ',' << p.note << ','
+    << r.steps << ',' << r.saturated_steps << ',' << r.max_violation;
   return o.str();
 }
 
@@ -99,7 +137,7 @@ std::map<std::string, CellResult> read_finished(const std::string& path) {
     std::stringstream ss(line);
     std::string x;
     while (std::getline(ss, x, ',')) f.push_back(x);
-    if (f.size() < 14) continue;
+    if (f.size() != 19) continue;
     try {
       CellResult r;
       r.cell = {f[0], f[1], f[3], f[4], std::stoi(f[2]), std::stoi(f[5]), std::stoi(f[6])};
@@ -110,6 +148,9 @@ std::map<std::string, CellResult> read_finished(const std::string& path) {
       r.p95_ms = std::stod(f[11]);
       r.final_q_error = std::stod(f[12]);
       r.final_v_norm = std::stod(f[13]);
+      r.steps = std::stol(f[16]);
+      r.saturated_steps = std::stol(f[17]);
+      r.max_violation = std::stod(f[18]);
       done[r.cell.key()] = r;
     } catch (const std::exception&) {
       continue;
@@ -151,8 +192,69 @@ const PaperCell& paper_cell(const PaperTables& tables, const std::string& table,
   throw std::logic_error("no paper cell for table " + table);
 }
 
+// the real-arm tables: time per update with ID/FD, then each run's outcome
+std::string arms_markdown(const std::vector<Cell>& cells, const std::map<std::string, CellResult>& done) {
+  auto find = [&](const Cell& c) -> const CellResult* {
+    const auto it = done.find(c.key());
+    return it == done.end() ? nullptr : &it->second;
+  };
+  std::vector<std::string> tasks, modes;
+  for (const Cell& c : cells) {
+    if (std::find(tasks.begin(), tasks.end(), c.model) == tasks.end()) tasks.push_back(c.model);
+    if (std::find(modes.begin(), modes.end(), c.derivatives) == modes.end()) modes.push_back(c.derivatives);
+  }
+  auto cell_of = [&](const std::string& task, const std::string& f, const std::string& mode) -> const CellResult* {
+    for (const Cell& c : cells) {
+      if (c.model == task && c.formulation == f && c.derivatives == mode) return find(c);
+    }
+    return nullptr;
+  };
+  auto ms = [](const CellResult* r) {
+    return r ? fmt(r->mean_ms) + (r->diverged ? "*" : (r->reached() ? "" : "°")) : std::string("–");
+  };
+  std::ostringstream o;
+  o << "# idmpc sweep: the real arms\n\n"
+    << "Each arm's reach task (`mjcf/arms.json`), torque limits from its actuators active in the OCP "
+    << "and at the plant. Mean ms per control update; `*` diverged (time averaged until then), "
+    << "`°` did not end within " << kReachTolerance << " rad of the target.\n\n| task | n |";
+  for (const auto& mode : modes) o << " FD " << mode << " | ID " << mode << " | ID/FD |";
+  o << "\n|---|---|";
+  for (size_t k = 0; k < modes.size(); ++k) o << "---|---|---|";
+  o << "\n";
+  for (const auto& task : tasks) {
+    int n = 0;
+    for (const auto& mode : modes) {
+      for (const char* f : {"fd", "id"}) {
+        if (const CellResult* r = cell_of(task, f, mode)) n = r->cell.n;
+      }
+    }
+    o << "| " << task << " | " << (n > 0 ? std::to_string(n) : "–") << " |";
+    for (const auto& mode : modes) {
+      const CellResult *fd = cell_of(task, "fd", mode), *id = cell_of(task, "id", mode);
+      o << ' ' << ms(fd) << " | " << ms(id) << " | " << fmt(fd && id ? id->mean_ms / fd->mean_ms : NAN, 2) << " |";
+    }
+    o << "\n";
+  }
+  o << "\n## Outcomes\n\n| task | variant | reached | final max abs(q - qref) [rad] | steps with a clamped "
+       "torque | largest excess of the OCP's torques over their bounds [N m] |\n|---|---|---|---|---|---|\n";
+  for (const auto& task : tasks) {
+    for (const auto& mode : modes) {
+      for (const char* f : {"fd", "id"}) {
+        const CellResult* r = cell_of(task, f, mode);
+        if (!r) continue;
+        o << "| " << task << " | " << (std::string(f) == "fd" ? "FD " : "ID ") << mode << " | "
+          << (r->diverged ? "diverged at " + fmt(r->diverged_at) + " s" : (r->reached() ? "yes" : "no")) << " | "
+          << fmt(r->final_q_error) << " | " << r->saturated_steps << " of " << r->steps << " | "
+          << fmt(r->max_violation) << " |\n";
+      }
+    }
+  }
+  return o.str();
+}
+
 std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
                      const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
+  if (opt.tables == kArmsTable) return arms_markdown(cells, done);
   auto find = [&](const Cell& c) -> const CellResult* {
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
@@ -225,24 +327,32 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
 }
 
 CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
-  Task task = base;
-  task.model = opt.models_dir + "/" + c.model;
+  const bool arm = c.table == kArmsTable;
+  // a paper cell is the paper's task on the cell's model; an arm cell is the arm's own task
+  Task task = arm ? load_task(in_models(opt, c.model)) : base;
+  if (!arm) {
+    task.model = in_models(opt, c.model);
+    task.Qa = {0.0};
+  }
   task.formulation = c.formulation;
   task.derivatives = c.derivatives;
   task.N = c.N;
   task.kmax = c.kmax;
-  task.duration = opt.duration;
-  task.Qa = {0.0};
+  if (!arm || opt.duration_given) task.duration = opt.duration;
   std::string log;
   if (opt.logs) {
-    log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.size() - 4) + "_" +
+    log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.rfind('.')) + "_" +
           c.formulation + "_" + c.derivatives + "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) + ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
   const RunSummary s = run_swingup(task, log, true).summary;
   CellResult r;
   r.cell = c;
+  r.cell.n = s.n;
   r.Qa = s.task.Qa.empty() ? 0.0 : s.task.Qa.front();
+  r.steps = s.steps;
+  r.saturated_steps = s.saturated_any;
+  r.max_violation = s.max_constraint_violation;
   r.diverged = s.diverged;
   r.diverged_at = s.diverged ? s.diverged_at : NAN;
   r.mean_ms = s.mean_update_ms;
@@ -259,12 +369,13 @@ void run(const SweepOptions& opt) {
   const Task base = load_task(tables.task);
   const std::vector<Cell> cells = grid(opt, tables);
   for (const Cell& c : cells) {
-    if (!fs::exists(opt.models_dir + "/" + c.model)) {
-      throw std::invalid_argument("model '" + opt.models_dir + "/" + c.model + "' not found (see --models)");
+    if (!fs::exists(in_models(opt, c.model))) {
+      throw std::invalid_argument("'" + in_models(opt, c.model) + "' not found (see --models)");
     }
   }
   fs::create_directories(opt.out_dir);
-  const std::string csv = opt.out_dir + "/sweep.csv", md = opt.out_dir + "/sweep.md";
+  const std::string stem = opt.out_dir + (opt.tables == kArmsTable ? "/arms" : "/sweep");
+  const std::string csv = stem + ".csv", md = stem + ".md";
   std::map<std::string, CellResult> done = read_finished(csv);
 
   // rewrite the finished cells cleanly, then append each new cell as soon as it ends
@@ -310,11 +421,19 @@ void register_sweep(CLI::App& app) {
   sub->add_option("--out", opt->out_dir, "output directory (sweep.csv, sweep.md)")->capture_default_str();
   sub->add_option("--models", opt->models_dir, "directory with the models of mjcf/paper_tables.json")
       ->capture_default_str();
-  sub->add_option("--tables", opt->tables, "12 (arm4 N x kmax), 3 (n = 8..32) or all")->capture_default_str();
+  sub->add_option("--tables", opt->tables,
+                  "12 (arm4 N x kmax), 3 (n = 8..32), all, or arms (the real arms' reach tasks of "
+                  "mjcf/arms.json, written to arms.csv and arms.md)")
+      ->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();
-  sub->add_option("--duration", opt->duration, "simulated seconds per run")->capture_default_str();
+  CLI::Option* duration =
+      sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")
+          ->capture_default_str();
   sub->add_flag("--logs", opt->logs, "keep each run's CSV log in the output directory");
-  sub->callback([opt] { run(*opt); });
+  sub->callback([opt, duration] {
+    opt->duration_given = duration->count() > 0;
+    run(*opt);
+  });
 }
 
 }  // namespace idmpc::app

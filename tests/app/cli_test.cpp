@@ -551,6 +551,36 @@ TEST_F(Cli, SweepIsResumable) {
   }
 }
 
+// the real-arm sweep: each task of arms.json under FD and ID, with time, outcome and saturation
+TEST_F(Cli, SweepRunsTheRealArmsTasks) {
+  write("reach.json", R"({"model": ")" + std::string(IDMPC_SOURCE_DIR) +
+                          R"(/mjcf/panda.xml", "q0": "home", "qref": [1.5, 0.6, 0, -1.3, 0, 1.9, 0.785],
+                          "duration": 5, "cgmres": {"alpha": 0, "init_full_horizon": true}})");
+  write("arms.json", R"({"tasks": ["reach.json"]})");
+  const Result r = idmpc("sweep --tables arms --derivatives adjoint --duration 0.03 --models . --out out");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(slurp(dir_ / "out" / "arms.csv"));
+  ASSERT_EQ(lines.size(), 3u) << "header, FD and ID";
+  const std::vector<std::string> header = split(lines[0]);
+  auto column = [&](const std::string& name) {
+    return static_cast<size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  for (size_t k : {size_t{1}, size_t{2}}) {
+    const std::vector<std::string> row = split(lines[k]);
+    ASSERT_EQ(row.size(), header.size());
+    EXPECT_EQ(row[column("table")], "arms");
+    EXPECT_EQ(row[column("model")], "reach.json");
+    EXPECT_EQ(row[column("n")], "7");
+    EXPECT_EQ(row[column("formulation")], k == 1 ? "fd" : "id");
+    EXPECT_EQ(row[column("steps")], "30");  // --duration overrides the task's 5 s
+    EXPECT_EQ(row[column("diverged")], "0");
+  }
+  const std::string md = slurp(dir_ / "out" / "arms.md");
+  EXPECT_NE(md.find("| reach.json | 7 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| reach.json | ID adjoint | no |"), std::string::npos) << md;  // 30 ms do not reach
+  EXPECT_NE(md.find("steps with a clamped torque"), std::string::npos) << md;
+}
+
 // ---------------------------------------------------------------------------------------------
 // the command line itself: parse errors, --help, --version, numbers
 
