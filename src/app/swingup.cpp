@@ -4,7 +4,7 @@
 #include <cmath>
 #include <iomanip>
 #include <iostream>
-#include <numeric>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -132,10 +132,10 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   s.diverged_at = result.diverged_at;
   s.divergence_reason = result.divergence_reason;
   const auto& ms = result.update_ms;
-  s.mean_update_ms = ms.empty() ? 0.0 : std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size());
+  s.mean_update_ms = result.mean_update_ms;
   s.p50_update_ms = mj::percentile(ms, 50);
   s.p95_update_ms = mj::percentile(ms, 95);
-  s.max_update_ms = mj::percentile(ms, 100);
+  s.max_update_ms = result.updates > 0 ? result.max_update_ms : std::numeric_limits<double>::quiet_NaN();
   s.rollout_ms = result.mean_phase_ms.rollout;
   s.costate_ms = result.mean_phase_ms.costate;
   s.gmres_ms = result.mean_phase_ms.gmres;

@@ -505,6 +505,19 @@ TEST_F(Cli, SwingupFallbackRerunsADivergedIdRunWithTheTasksQa) {
   EXPECT_NE(r.err.find("rerun with Qa"), std::string::npos) << r.err;
 }
 
+// a run has at least one control step and at most 1e9; memory does not grow with it
+TEST_F(Cli, SwingupRefusesDurationsOfNoStepOrBeyondAnyUse) {
+  for (const auto& [duration, needle] : std::vector<std::pair<std::string, std::string>>{
+           {"1e-5", "shorter than one control step"}, {"1e300", "more than 1e9 control steps"},
+           {"1e7", "more than 1e9 control steps"}}) {
+    SCOPED_TRACE(duration);
+    const Result r = idmpc("swingup " + quote(kArm4) + " --duration " + duration + " --log log.csv --summary s.json");
+    expect_error(r, {"--duration", needle});
+    EXPECT_FALSE(fs::exists(dir_ / "log.csv"));
+    EXPECT_FALSE(fs::exists(dir_ / "s.json"));
+  }
+}
+
 TEST_F(Cli, SwingupWarnsThatQaDoesNothingInFd) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --formulation fd --Qa 1 --duration 0.01 --summary s.json");
   ASSERT_EQ(r.code, 0) << r.err;

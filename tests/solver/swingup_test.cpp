@@ -5,6 +5,7 @@
 // result, never an exception.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -42,6 +43,7 @@ struct Settings {
   int kmax = 10;
   double zeta = 0;  // 1/Δt
   double duration = kDuration;
+  long kept_update_times = mj::kKeptUpdateTimes;
 };
 
 struct LoopRun {
@@ -79,6 +81,7 @@ class Loop {
     ls_.q0 = paper.q0;
     ls_.v0 = VecX<double>::Zero(n);
     ls_.phase_timing = false;  // tests never time anything
+    ls_.kept_update_times = settings.kept_update_times;
     run_.settings = settings;
     const size_t expected = static_cast<size_t>(std::lround(settings.duration / kDt));
     for (auto* x : {&run_.q, &run_.v, &run_.u}) x->reserve(expected);
@@ -296,6 +299,22 @@ void expect_clean_divergence(const Settings& s, double within) {
   // timing is averaged over the updates before the divergence only
   EXPECT_EQ(r.update_ms.size(), static_cast<size_t>(r.steps - 1));
   EXPECT_EQ(r.final_q.size(), kN);
+}
+
+// beyond kept_update_times the run keeps a uniform sample of the update times: memory does not
+// grow with the duration, the mean and the max stay exact
+TEST(SwingupTiming, UpdateTimesBeyondTheKeptNumberAreSampled) {
+  Settings s;
+  s.duration = 0.2;
+  s.kept_update_times = 16;
+  const mj::RunResult r = run_swingup(s).result;
+  ASSERT_FALSE(r.diverged);
+  EXPECT_EQ(r.updates, 200);
+  ASSERT_EQ(r.update_ms.size(), 16u);
+  const double kept_max = *std::max_element(r.update_ms.begin(), r.update_ms.end());
+  EXPECT_LE(kept_max, r.max_update_ms);
+  EXPECT_GT(r.mean_update_ms, 0.0);
+  EXPECT_LE(r.mean_update_ms, r.max_update_ms);
 }
 
 TEST(SwingupDivergence, FdWithOneGmresIterationIsReportedNotThrown) {

@@ -216,6 +216,14 @@ ResolvedTask resolve(const Task& t, int n) {
   if (!(t.duration > 0) || !std::isfinite(t.duration)) {
     throw std::invalid_argument("duration must be positive, got " + std::to_string(t.duration));
   }
+  if (t.dt > 0 && !(t.duration / t.dt >= 0.5)) {
+    throw std::invalid_argument("--duration (duration) " + text(t.duration) + " s is shorter than one control step (dt = " +
+                                text(t.dt) + " s)");
+  }
+  if (t.dt > 0 && !(t.duration / t.dt <= 1e9)) {
+    throw std::invalid_argument("--duration (duration) " + text(t.duration) + " s is more than 1e9 control steps of " +
+                                text(t.dt) + " s");
+  }
   // named as the option and as the task field
   auto weight = [&](const std::vector<double>& x, const char* name) {
     const std::string both = std::string("--") + name + " (weights." + name + ")";

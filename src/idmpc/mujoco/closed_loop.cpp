@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <random>
 #include <stdexcept>
 
 namespace idmpc::mj {
@@ -33,14 +34,24 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     throw std::invalid_argument("duration must be positive, got " + std::to_string(settings.duration));
   }
   const double dt = controller.dt();
+  if (!(settings.duration / dt <= kMaxSteps)) {
+    throw std::invalid_argument("duration " + std::to_string(settings.duration) + " s is more than 1e9 control steps of " +
+                                std::to_string(dt) + " s");
+  }
   const long steps = std::lround(settings.duration / dt);
+  if (steps < 1) {
+    throw std::invalid_argument("duration " + std::to_string(settings.duration) +
+                                " s is shorter than one control step (dt = " + std::to_string(dt) + " s)");
+  }
   const std::string timestep_warning = plant.set_control_period(dt);
   plant.reset(settings.q0, settings.v0);
   controller.solver().enable_timing(settings.phase_timing);
 
   RunResult result;
   if (!timestep_warning.empty()) result.warnings.push_back(timestep_warning);
-  result.update_ms.reserve(static_cast<size_t>(steps));
+  const long kept = std::max(1L, settings.kept_update_times);
+  result.update_ms.reserve(static_cast<size_t>(std::min(steps, kept)));
+  std::mt19937_64 sampler(0x1d3c);  // reservoir sampling beyond `kept`, reproducible
   VecX<double> q = plant.q(), v = plant.v();
   // the torque applied over the current period; the controller's output applies over the next
   VecX<double> tau = controller.initialize(q, v), tau_cmd = controller.commanded_torque();
@@ -74,7 +85,15 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     on_step(StepRecord{t, q, v, tau, tau_cmd, controller.residual_norm(), ms});
     result.steps = static_cast<int>(k + 1);
     if (reason.empty()) {
-      result.update_ms.push_back(ms);
+      ++result.updates;
+      result.mean_update_ms += (ms - result.mean_update_ms) / static_cast<double>(result.updates);
+      result.max_update_ms = std::max(result.max_update_ms, ms);
+      if (result.updates <= kept) {
+        result.update_ms.push_back(ms);
+      } else {
+        const auto slot = std::uniform_int_distribution<long>(0, result.updates - 1)(sampler);
+        if (slot < kept) result.update_ms[static_cast<size_t>(slot)] = ms;
+      }
       residual_sum += controller.residual_norm();
       result.max_constraint_violation = std::max(result.max_constraint_violation, controller.constraint_violation());
       const UpdateTimes& ph = controller.solver().last_times();
@@ -108,7 +127,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     tau_cmd = controller.commanded_torque();
   }
 
-  const double m = std::max<double>(1.0, static_cast<double>(result.update_ms.size()));
+  const double m = std::max<double>(1.0, static_cast<double>(result.updates));
   result.mean_residual = residual_sum / m;
   result.mean_phase_ms = UpdateTimes{1e3 * phase_sum.total / m, 1e3 * phase_sum.rollout / m,
                                      1e3 * phase_sum.costate / m, 1e3 * phase_sum.gmres / m};

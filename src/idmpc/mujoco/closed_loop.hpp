@@ -13,10 +13,16 @@
 
 namespace idmpc::mj {
 
+/// @brief Update times a run keeps by default (8 MiB; 17 min of control at 1 kHz).
+inline constexpr long kKeptUpdateTimes = 1L << 20;
+/// @brief Control steps a run may have at most (11.6 days at 1 kHz).
+inline constexpr double kMaxSteps = 1e9;
+
 struct ClosedLoopSettings {
   double duration = 10.0;
   VecX<double> q0, v0;
   bool phase_timing = true;  ///< split each update's time into rollout/costate/GMRES
+  long kept_update_times = kKeptUpdateTimes;  ///< RunResult::update_ms keeps at most this many
 };
 
 /// @brief One control step as logged: measured state, the torque the plant applied over
@@ -37,7 +43,13 @@ struct RunResult {
   double diverged_at = std::numeric_limits<double>::quiet_NaN();
   std::string divergence_reason;
   int steps = 0;                    ///< control steps completed (rows logged)
-  std::vector<double> update_ms;    ///< per successful update (includes the applied torque)
+  /// @brief Times of the successful updates [ms] (each includes the torque to apply): all of
+  /// them up to ClosedLoopSettings::kept_update_times, beyond that a uniform random sample of that size, so that
+  /// memory does not grow with the duration (percentiles are then estimates)
+  std::vector<double> update_ms;
+  long updates = 0;                 ///< successful updates
+  double mean_update_ms = 0;        ///< over all of them (exact)
+  double max_update_ms = 0;         ///< over all of them (exact)
   double init_residual = 0;         ///< ‖F_0‖ after the zero-horizon Newton solve
   double mean_residual = 0;
   int evaluations_per_update = 0;   ///< F evaluations in one update
