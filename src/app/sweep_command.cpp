@@ -1,8 +1,11 @@
 // idmpc sweep: the paper's closed-loop grids (Tables 1–3), resumable, with our figures beside
 // the paper's.
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -10,6 +13,10 @@
 #include <map>
 #include <set>
 #include <sstream>
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
@@ -36,11 +43,23 @@ constexpr double kReachTolerance = 1e-3;
 struct Cell {
   std::string table, model, formulation, derivatives;  // arms: model is the task file's name
   int n = 0, N = 0, kmax = 0;
+  std::string settings;  // hash of everything else the cell runs with (the task as run)
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + std::to_string(N) +
-           "|" + std::to_string(kmax);
+           "|" + std::to_string(kmax) + "|" + settings;
   }
 };
+
+// FNV-1a of the task as the cell runs it, so that a resumed sweep never mixes settings
+std::string settings_hash(Task task, const std::string& model) {
+  task.model = model;  // as named in the grid, not where --models happens to put it
+  task.source.clear();
+  std::uint64_t h = 1469598103934665603ULL;
+  for (const unsigned char ch : to_json(task).dump()) h = (h ^ ch) * 1099511628211ULL;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+  return hex;
+}
 
 struct CellResult {
   Cell cell;
@@ -63,12 +82,28 @@ PaperFigure paper_figure(const PaperTables& tables, const Cell& c) {
 }
 
 // the paper's cells, in the file's order, for the chosen tables and derivative modes
-// the real arms' reach tasks (mjcf/arms.json), paths relative to the models directory
 // a file of the models directory (an absolute name stays as it is)
 std::string in_models(const SweepOptions& opt, const std::string& file) {
   return (std::filesystem::path(opt.models_dir) / file).string();
 }
 
+// the task a cell runs: the paper's on the cell's model, or an arm's own task file
+Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
+  const bool arm = c.table == kArmsTable;
+  Task task = arm ? load_task(in_models(opt, c.model)) : base;
+  if (!arm) {
+    task.model = in_models(opt, c.model);
+    task.Qa = {0.0};  // the paper's rule: Q_a = 0 first, the fallback only after a divergence
+  }
+  task.formulation = c.formulation;
+  task.derivatives = c.derivatives;
+  task.N = c.N;
+  task.kmax = c.kmax;
+  if (!arm || opt.duration_given) task.duration = opt.duration;
+  return task;
+}
+
+// the real arms' reach tasks (mjcf/arms.json), paths relative to the models directory
 std::vector<std::string> arm_tasks(const SweepOptions& opt) {
   const std::string path = opt.models_dir + "/arms.json";
   std::ifstream in(path);
@@ -80,7 +115,16 @@ std::vector<std::string> arm_tasks(const SweepOptions& opt) {
   }
 }
 
-std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
+std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables);
+
+// the grid, each cell keyed by the settings it runs with
+std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables, const Task& base) {
+  std::vector<Cell> cells = grid_of(opt, tables);
+  for (Cell& c : cells) c.settings = settings_hash(cell_task(base, c, opt), c.model);
+  return cells;
+}
+
+std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables) {
   std::vector<std::string> modes;
   if (opt.derivatives == "both") {
     modes = {"matrix", "adjoint"};
@@ -96,7 +140,7 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
     for (const auto& mode : modes) {
       for (const std::string& file : arm_tasks(opt)) {
         const Task t = load_task(in_models(opt, file));
-        for (const char* f : {"fd", "id"}) cells.push_back({kArmsTable, file, f, mode, 0, t.N, t.kmax});
+        for (const char* f : {"fd", "id"}) cells.push_back({kArmsTable, file, f, mode, 0, t.N, t.kmax, ""});
       }
     }
     return cells;
@@ -104,7 +148,7 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
   for (const auto& mode : modes) {
     for (const PaperCell& p : tables.cells) {
       if (opt.tables != "all" && p.table != opt.tables) continue;
-      cells.push_back({p.table, p.model, p.formulation, mode, p.n, p.N, p.kmax});
+      cells.push_back({p.table, p.model, p.formulation, mode, p.n, p.N, p.kmax, ""});
     }
   }
   return cells;
@@ -113,7 +157,7 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables) {
 const char* kCsvHeader =
     "table,model,n,formulation,derivatives,N,kmax,Qa,diverged,diverged_at,mean_update_ms,"
     "p95_update_ms,final_q_error,final_v_norm,paper_ms,paper_note,steps,saturated_steps,"
-    "max_constraint_violation";
+    "max_constraint_violation,settings";
 
 std::string csv_row(const PaperTables& tables, const CellResult& r) {
   const PaperFigure p = paper_figure(tables, r.cell);
@@ -122,25 +166,37 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
     << r.cell.formulation << ',' << r.cell.derivatives << ',' << r.cell.N << ',' << r.cell.kmax << ','
     << r.Qa << ',' << (r.diverged ? 1 : 0) << ',' << r.diverged_at << ',' << r.mean_ms << ','
     << r.p95_ms << ',' << r.final_q_error << ',' << r.final_v_norm << ',' << p.ms << ',' << p.note << ','
-    << r.steps << ',' << r.saturated_steps << ',' << r.max_violation;
+    << r.steps << ',' << r.saturated_steps << ',' << r.max_violation << ',' << r.cell.settings;
   return o.str();
 }
 
-// finished cells of an earlier, possibly interrupted, sweep; malformed lines are dropped
-std::map<std::string, CellResult> read_finished(const std::string& path) {
+// finished cells of an earlier, possibly interrupted, sweep of this grid (CRLF line ends
+// accepted; a torn last line, as an interrupted append leaves it, is dropped). A file of
+// another format or with cells of other settings is refused, never overwritten.
+std::map<std::string, CellResult> read_finished(const std::string& path, const std::vector<Cell>& cells) {
   std::map<std::string, CellResult> done;
   std::ifstream in(path);
   std::string line;
-  if (!std::getline(in, line) || line != kCsvHeader) return done;
-  while (std::getline(in, line)) {
+  auto next = [&] {
+    if (!std::getline(in, line)) return false;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    return true;
+  };
+  if (!next()) return done;
+  const std::string refuse = "'" + path + "' holds ";
+  const std::string what = "; use another --out or move it away";
+  if (line != kCsvHeader) throw std::invalid_argument(refuse + "something other than this idmpc's sweep results" + what);
+  std::set<std::string> keys;
+  for (const Cell& c : cells) keys.insert(c.key());
+  while (next()) {
     std::vector<std::string> f;
     std::stringstream ss(line);
     std::string x;
     while (std::getline(ss, x, ',')) f.push_back(x);
-    if (f.size() != 19) continue;
+    if (f.size() != 20) continue;
     try {
       CellResult r;
-      r.cell = {f[0], f[1], f[3], f[4], std::stoi(f[2]), std::stoi(f[5]), std::stoi(f[6])};
+      r.cell = {f[0], f[1], f[3], f[4], std::stoi(f[2]), std::stoi(f[5]), std::stoi(f[6]), f[19]};
       r.Qa = std::stod(f[7]);
       r.diverged = f[8] == "1";
       r.diverged_at = std::stod(f[9]);
@@ -151,9 +207,15 @@ std::map<std::string, CellResult> read_finished(const std::string& path) {
       r.steps = std::stol(f[16]);
       r.saturated_steps = std::stol(f[17]);
       r.max_violation = std::stod(f[18]);
+      if (!keys.count(r.cell.key())) {
+        throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
+                                    r.cell.formulation + " " + r.cell.derivatives + ": other duration, weights or "
+                                    "task)" + what);
+      }
       done[r.cell.key()] = r;
-    } catch (const std::exception&) {
-      continue;
+    } catch (const std::logic_error& e) {
+      if (dynamic_cast<const std::invalid_argument*>(&e) && std::string(e.what()).rfind(refuse, 0) == 0) throw;
+      continue;  // a malformed number: a torn line
     }
   }
   return done;
@@ -260,7 +322,13 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
     return it == done.end() ? nullptr : &it->second;
   };
   auto cell = [&](const std::string& table, const std::string& f, const std::string& mode, int n, int N, int kmax) {
-    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, n, N, kmax};
+    // the grid's cell (with its settings key), or an unkeyed one that finds nothing
+    for (const Cell& c : cells) {
+      if (c.table == table && c.formulation == f && c.derivatives == mode && c.n == n && c.N == N && c.kmax == kmax) {
+        return c;
+      }
+    }
+    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, n, N, kmax, ""};
   };
   // ours (paper) for the ID/FD ratio of one grid point
   auto ratio = [&](const std::string& table, const std::string& mode, int n, int N, int kmax) {
@@ -327,18 +395,7 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
 }
 
 CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
-  const bool arm = c.table == kArmsTable;
-  // a paper cell is the paper's task on the cell's model; an arm cell is the arm's own task
-  Task task = arm ? load_task(in_models(opt, c.model)) : base;
-  if (!arm) {
-    task.model = in_models(opt, c.model);
-    task.Qa = {0.0};
-  }
-  task.formulation = c.formulation;
-  task.derivatives = c.derivatives;
-  task.N = c.N;
-  task.kmax = c.kmax;
-  if (!arm || opt.duration_given) task.duration = opt.duration;
+  const Task task = cell_task(base, c, opt);
   std::string log;
   if (opt.logs) {
     log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.rfind('.')) + "_" +
@@ -367,7 +424,7 @@ void run(const SweepOptions& opt) {
   if (!(opt.duration > 0)) throw std::invalid_argument("--duration must be positive");
   const PaperTables tables = load_paper_tables();
   const Task base = load_task(tables.task);
-  const std::vector<Cell> cells = grid(opt, tables);
+  const std::vector<Cell> cells = grid(opt, tables, base);
   for (const Cell& c : cells) {
     if (!fs::exists(in_models(opt, c.model))) {
       throw std::invalid_argument("'" + in_models(opt, c.model) + "' not found (see --models)");
@@ -376,7 +433,17 @@ void run(const SweepOptions& opt) {
   fs::create_directories(opt.out_dir);
   const std::string stem = opt.out_dir + (opt.tables == kArmsTable ? "/arms" : "/sweep");
   const std::string csv = stem + ".csv", md = stem + ".md";
-  std::map<std::string, CellResult> done = read_finished(csv);
+  // one sweep at a time in a directory: the lock goes with the process, however it ends
+  const int dir_fd = ::open(opt.out_dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir_fd < 0) throw std::runtime_error("cannot open --out '" + opt.out_dir + "': " + std::strerror(errno));
+  struct Unlock {
+    int fd;
+    ~Unlock() { ::close(fd); }
+  } unlock{dir_fd};
+  if (::flock(dir_fd, LOCK_EX | LOCK_NB) != 0) {
+    throw std::runtime_error("another sweep is writing into '" + opt.out_dir + "' (it is locked); wait for it or use another --out");
+  }
+  std::map<std::string, CellResult> done = read_finished(csv, cells);
 
   // rewrite the finished cells cleanly, then append each new cell as soon as it ends
   {

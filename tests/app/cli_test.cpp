@@ -1,6 +1,7 @@
 // The idmpc command line as a user meets it: exit codes, one clear error line naming what is
 // wrong, outputs in the promised format, and no half-written file left behind by a failure.
 #include <gtest/gtest.h>
+#include <sys/file.h>
 
 #include <fcntl.h>
 #include <signal.h>
@@ -562,6 +563,37 @@ TEST_F(Cli, SweepIsResumable) {
   for (const auto& e : fs::directory_iterator(dir_ / "sweep")) {
     EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
   }
+}
+
+// a resumed sweep never mixes settings, reads CRLF files, and refuses a directory another
+// sweep is writing into
+TEST_F(Cli, SweepResumeChecksSettingsAndTheDirectory) {
+  const std::string args = "sweep --tables 3 --duration 0.02 --out sweep";
+  ASSERT_EQ(idmpc(args).code, 0);
+  const fs::path csv = dir_ / "sweep" / "sweep.csv";
+  const std::string before = slurp(csv);
+
+  const Result other = idmpc("sweep --tables 3 --duration 0.03 --out sweep");
+  expect_error(other, {"sweep.csv", "other settings"});
+  EXPECT_EQ(slurp(csv), before) << "the earlier results must be kept";
+
+  std::string crlf;
+  for (const std::string& l : lines_of(before)) crlf += l + "\r\n";
+  std::ofstream(csv, std::ios::binary) << crlf;
+  const Result again = idmpc(args);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(again.err.find("ms per update"), std::string::npos) << "every cell was done earlier: " << again.err;
+
+  std::ofstream(csv) << "something,else\n1,2\n";
+  expect_error(idmpc(args), {"sweep.csv", "something other than"});
+
+  fs::remove(csv);
+  const int fd = ::open((dir_ / "sweep").c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(fd, 0);
+  ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+  expect_error(idmpc(args), {"another sweep", "sweep"});
+  ::close(fd);
+  EXPECT_FALSE(fs::exists(csv));
 }
 
 // the real-arm sweep: each task of arms.json under FD and ID, with time, outcome and saturation
