@@ -519,6 +519,23 @@ TEST_F(Cli, SwingupRefusesDurationsOfNoStepOrBeyondAnyUse) {
   }
 }
 
+// what the run does not model or had to change is said before it starts, and kept in the summary
+TEST_F(Cli, SwingupWarnsAboutUnmodeledFeaturesRangesAndTheTimestep) {
+  const Result r = idmpc("swingup " + quote(std::string(IDMPC_SOURCE_DIR) + "/mjcf/panda.xml") +
+                         " --q0 0 0 0 0 0 5 0 --qref 0 0 0 -4 0 1 0 --dt 0.0015 --duration 0.003 --summary s.json");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> expected = {
+      "does not model: limit on joint 'joint1'", "q0 of joint 'joint4' of body 'link4' is 0, outside its range",
+      "q0 of joint 'joint6' of body 'link6' is 5, outside its range", "qref of joint 'joint4' of body 'link4' is -4",
+      "timestep 0.001 s is replaced by the control period 0.0015 s"};
+  const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
+  for (const std::string& w : expected) {
+    EXPECT_NE(r.err.find(w), std::string::npos) << w << " not in: " << r.err;
+    EXPECT_NE(s["warnings"].dump().find(w), std::string::npos) << w;
+  }
+  EXPECT_LT(r.err.find("idmpc: warning:"), r.err.find("q0 of joint"));  // before the run, prefixed
+}
+
 TEST_F(Cli, SwingupWarnsThatQaDoesNothingInFd) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --formulation fd --Qa 1 --duration 0.01 --summary s.json");
   ASSERT_EQ(r.code, 0) << r.err;
