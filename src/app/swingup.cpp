@@ -57,6 +57,10 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
       [](const Task& s, Task& d) { d.direct_torque = s.direct_torque; });
   sub.add_flag("--fallback", o.fallback,
                "ID: if the run diverges with Qa = 0, rerun it with the task's weights.Qa_fallback (the paper's rule)");
+  add(sub.add_flag("--implicit-damping", t.implicit_damping,
+                   "integrate joint damping implicitly in the horizon (step Tf/N, needs --alpha 0): for heavily "
+                   "damped arms"),
+      [](const Task& s, Task& d) { d.implicit_damping = s.implicit_damping; });
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
                    "ID + adjoint: evaluate the horizon stages one by one instead of in SIMD lanes"),
       [](const Task& s, Task& d) { d.simd_stages = s.simd_stages; });
@@ -88,8 +92,12 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   const VecX<double> upper = imported.actuation.torque_upper.cwiseMin(r.torque_limit);
   const bool limited = (lower.array().isFinite() || upper.array().isFinite()).any();
   const TorqueLimits limits = limited ? TorqueLimits{lower, upper} : TorqueLimits{};
-  Controller controller(OcpProblem(model, r.formulation, r.derivatives, r.weights, r.qref, task.N, limits),
-                        r.cgmres);
+  // the horizon's model: the plant's, or with its damping integrated implicitly over T_f/N
+  std::optional<Model> implicit;
+  if (task.implicit_damping) implicit.emplace(with_implicit_damping(model, r.cgmres.Tf / task.N));
+  Controller controller(OcpProblem(implicit ? *implicit : model, r.formulation, r.derivatives, r.weights, r.qref,
+                                   task.N, limits),
+                        r.cgmres, &model);
   controller.nlp().set_stage_batching(task.simd_stages);
   controller.set_torque_limits(lower, upper);
   mj::Plant plant(m.get(), imported.actuation);

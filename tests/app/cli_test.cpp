@@ -536,6 +536,33 @@ TEST_F(Cli, SwingupWarnsAboutUnmodeledFeaturesRangesAndTheTimestep) {
   EXPECT_LT(r.err.find("idmpc: warning:"), r.err.find("q0 of joint"));  // before the run, prefixed
 }
 
+// a heavily damped arm (the UR5e with Menagerie's 200 N m s/rad on its big joints): explicit
+// Euler in FD's horizon is unstable at N = 25 (Δτ·eig(M⁻¹D) ≈ 7–15, measured), so the
+// full-horizon start has no finite solution; with the damping integrated implicitly FD runs.
+// ID needs no such option (its damping enters only the torque).
+TEST_F(Cli, SwingupImplicitDampingLetsFdRunAHeavilyDampedArm) {
+  std::string xml = slurp(std::string(IDMPC_SOURCE_DIR) + "/mjcf/ur5e.xml");
+  const std::string light = R"(armature="0.1" damping="2")";
+  ASSERT_NE(xml.find(light), std::string::npos);
+  xml.replace(xml.find(light), light.size(), R"(armature="0.1" damping="200")");
+  write("ur5e_damped.xml", xml);
+  write("task.json", R"({"model": "ur5e_damped.xml", "q0": "home", "qref": [-0.3, -2.5, 0.3, -1.6, -1.571, 0],
+    "formulation": "fd", "weights": {"Qq": 100, "Qv": 10, "R": 1e-3},
+    "cgmres": {"Tf": 0.5, "alpha": 0, "init_full_horizon": true}})");
+  const Result exp = idmpc("swingup --task task.json --duration 0.05 --summary explicit.json");
+  ASSERT_EQ(exp.code, 0) << exp.err;
+  const nlohmann::json e = nlohmann::json::parse(slurp(dir_ / "explicit.json"));
+  EXPECT_EQ(e["diverged"], true);
+  EXPECT_EQ(e["diverged_at"], 0.0);
+  const Result imp = idmpc("swingup --task task.json --implicit-damping --duration 0.05 --summary implicit.json");
+  ASSERT_EQ(imp.code, 0) << imp.err;
+  const nlohmann::json i = nlohmann::json::parse(slurp(dir_ / "implicit.json"));
+  EXPECT_EQ(i["diverged"], false) << i["divergence_reason"];
+  EXPECT_EQ(i["task"]["implicit_damping"], true);
+  expect_error(idmpc("swingup --task task.json --implicit-damping --alpha 1 --init-full-horizon false --duration 0.05"),
+               {"--implicit-damping", "alpha = 0"});
+}
+
 TEST_F(Cli, SwingupWarnsThatQaDoesNothingInFd) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --formulation fd --Qa 1 --duration 0.01 --summary s.json");
   ASSERT_EQ(r.code, 0) << r.err;

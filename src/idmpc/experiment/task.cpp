@@ -135,7 +135,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   const Reader r{j, where};
   if (!j.is_object()) throw std::invalid_argument(r.where + ": expected a JSON object");
   r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
-           "simd_stages", "direct_torque", "torque_limit", "weights", "cgmres"});
+           "simd_stages", "direct_torque", "implicit_damping", "torque_limit", "weights", "cgmres"});
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
@@ -157,6 +157,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   r.get("derivatives", t.derivatives);
   r.get("simd_stages", t.simd_stages);
   r.get("direct_torque", t.direct_torque);
+  r.get("implicit_damping", t.implicit_damping);
   if (r.has("torque_limit")) r.get("torque_limit", t.torque_limit);
   if (r.has("weights")) {
     const Reader w = r.sub("weights");
@@ -203,6 +204,7 @@ nlohmann::json to_json(const Task& t) {
   j["derivatives"] = t.derivatives;
   j["simd_stages"] = t.simd_stages;
   j["direct_torque"] = t.direct_torque;
+  j["implicit_damping"] = t.implicit_damping;
   if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
   j["weights"] = {{"Qq", t.Qq}, {"Qv", t.Qv}, {"Qa", t.Qa}, {"R", t.R}, {"Qa_fallback", t.Qa_fallback}};
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
@@ -275,6 +277,10 @@ ResolvedTask resolve(const Task& t, int n) {
   r.cgmres.h = t.h;
   r.cgmres.init_full_horizon = t.init_full_horizon;
   r.cgmres.validate();
+  if (t.implicit_damping && t.alpha != 0) {
+    throw std::invalid_argument("--implicit-damping (implicit_damping) needs a fixed horizon, alpha = 0 (its step is "
+                                "T_f/N), got alpha = " + text(t.alpha));
+  }
   return r;
 }
 

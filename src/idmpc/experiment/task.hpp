@@ -15,6 +15,8 @@
 ///   "formulation"  "fd" or "id";  "derivatives": "matrix" or "adjoint"
 ///   "simd_stages"  ID + adjoint: evaluate horizon stages in SIMD lanes (bool)
 ///   "direct_torque" apply joint torques through qfrc_applied instead of the actuators (bool)
+///   "implicit_damping" integrate joint damping implicitly in the horizon (with_implicit_damping,
+///                  step T_f/N; needs alpha = 0): for heavily damped arms (bool)
 ///   "torque_limit" |τ_j| ≤ this: a scalar or one per joint (empty: the model's actuator ranges)
 ///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars or one per joint; "Qa_fallback": the Q_a
 ///                  an ID run that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
@@ -45,6 +47,7 @@ struct Task {
   std::string formulation, derivatives;
   bool simd_stages = true;
   bool direct_torque = false;
+  bool implicit_damping = false;
   std::vector<double> torque_limit;  ///< empty: the model's actuator ranges
   std::vector<double> Qq, Qv, Qa, R;
   double Qa_fallback = 0;

@@ -1,6 +1,7 @@
 #include "idmpc/model/model.hpp"
 
 #include <cmath>
+#include <string>
 #include <stdexcept>
 #include <utility>
 
@@ -105,6 +106,19 @@ Link Model::link(int i) const {
   l.q_spring = q_spring[i];
   l.joint_name = joint_names[i];
   return l;
+}
+
+Model with_implicit_damping(const Model& model, double dt) {
+  if (!(dt >= 0) || !std::isfinite(dt)) {
+    throw std::invalid_argument("implicit damping: step must be non-negative and finite, got " + std::to_string(dt));
+  }
+  std::vector<Link> links;
+  links.reserve(static_cast<size_t>(model.n));
+  for (int i = 0; i < model.n; ++i) {
+    links.push_back(model.link(i));
+    links.back().armature += dt * links.back().damping;
+  }
+  return Model(links, model.gravity, model.name);
 }
 
 }  // namespace idmpc

@@ -71,4 +71,11 @@ class Model {
   Link link(int i) const;
 };
 
+/// @brief The model whose forward dynamics integrate joint damping implicitly over a step dt:
+/// armature + dt·damping. With it, explicit Euler v⁺ = v + dt·q̈ of the FD dynamics
+/// q̈ = (M + dt·D)⁻¹(τ − c − D v) satisfies M (v⁺ − v)/dt = τ − c − D v⁺ (the damping at the
+/// end of the step, as MuJoCo's Euler integrator does), stable for any dt; its inverse
+/// dynamics are τ = M q̈ + c + D v⁺. Throws std::invalid_argument for dt < 0 or non-finite.
+Model with_implicit_damping(const Model& model, double dt);
+
 }  // namespace idmpc

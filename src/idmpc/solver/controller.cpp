@@ -9,8 +9,15 @@
 
 namespace idmpc {
 
-Controller::Controller(OcpProblem problem, const CgmresSettings& settings)
-    : nlp_(std::move(problem)), solver_(nlp_, settings), data_(nlp_.problem().model()) {
+Controller::Controller(OcpProblem problem, const CgmresSettings& settings, const Model* plant_model)
+    : nlp_(std::move(problem)),
+      solver_(nlp_, settings),
+      plant_model_(plant_model ? *plant_model : nlp_.problem().model()),
+      data_(plant_model_) {
+  if (plant_model_.n != nlp_.n()) {
+    throw std::invalid_argument("the plant model has " + std::to_string(plant_model_.n) + " joints, the problem " +
+                                std::to_string(nlp_.n()));
+  }
   const int n = nlp_.n();
   for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_}) *x = Vec::Zero(n);
   lower_ = Vec::Constant(n, -std::numeric_limits<double>::infinity());
@@ -79,7 +86,7 @@ void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
     // delay-compensated inverse dynamics (paper eqs. 27–28)
     q_pred_ = q + dt * v;
     v_pred_ = v + dt * a0_hat;
-    tau_cmd_ = rnea(nlp_.problem().model(), data_, q_pred_, v_pred_, U0);
+    tau_cmd_ = rnea(plant_model_, data_, q_pred_, v_pred_, U0);
   }
   // the plant never receives a torque its actuator cannot give (a non-finite command is a
   // divergence, reported by update)

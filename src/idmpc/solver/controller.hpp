@@ -24,7 +24,9 @@ class Controller {
   using In = Eigen::Ref<const Vec>;
 
   /// @brief Owns the problem and the solver; throws std::invalid_argument on bad settings.
-  Controller(OcpProblem problem, const CgmresSettings& settings);
+  /// `plant_model` (kept by reference) is the model the ID torque rule uses when the problem's
+  /// differs from the plant's (with_implicit_damping); null: the problem's model.
+  Controller(OcpProblem problem, const CgmresSettings& settings, const Model* plant_model = nullptr);
   Controller(const Controller&) = delete;
   Controller& operator=(const Controller&) = delete;
 
@@ -73,7 +75,8 @@ class Controller {
 
   SingleShooting nlp_;
   Cgmres solver_;
-  Data data_;  ///< for the ID torque
+  const Model& plant_model_;  ///< for the ID torque
+  Data data_;                 ///< for the ID torque
   Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;
   std::string failure_;
 };
