@@ -20,6 +20,7 @@ template void aba_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                               const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
 template void rnea_vjp(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template void minv_apply_columns(const Model&, Data&, int);
+template const MatX<double>& minv_matrix(const Model&, Data&);
 template struct DataTpl<double>;
 
 }  // namespace idmpc

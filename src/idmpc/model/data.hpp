@@ -79,7 +79,8 @@ template <typename S> struct DataTpl {
       : n(model.n),
         X_up(n), V(n), A(n), F(n), h(n), vJ(n),
         tau(VecX<S>::Zero(n)), qdd(VecX<S>::Zero(n)),
-        IA(n), pA(n), U(n), c(n), D(VecX<S>::Zero(n)), u(VecX<S>::Zero(n)),
+        IA(n), pA(n), U(n), c(n), Ud(n), D(VecX<S>::Zero(n)), Dinv(VecX<S>::Zero(n)),
+        u(VecX<S>::Zero(n)),
         Ic(n), M(MatX<S>::Zero(n, n)),
         oX(n), oS(n), oV(n), oA(n), oI(n), oB(n), oF(n), IcS(n), BcS(n), psi(n), w(n), G(n), H(n),
         dtau_dq(MatX<S>::Zero(n, n)), dtau_dv(MatX<S>::Zero(n, n)),
@@ -87,7 +88,7 @@ template <typename S> struct DataTpl {
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Minv_x(VecX<S>::Zero(n)),
+        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oUD(n),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
         rhs(MatX<S>::Zero(n, n)),
         passes(n) {}
@@ -102,10 +103,10 @@ template <typename S> struct DataTpl {
   VecX<S> tau;  ///< rnea output
   VecX<S> qdd;  ///< aba output
 
-  // ABA (Featherstone Table 7.1)
+  // ABA (Featherstone Table 7.1); Ud = U/D and Dinv = 1/D, so that no sweep divides
   List<Mat6<S>> IA;
-  List<Vec6<S>> pA, U, c;
-  VecX<S> D, u;
+  List<Vec6<S>> pA, U, c, Ud;
+  VecX<S> D, Dinv, u;
 
   // CRBA
   List<Inertia<S>> Ic;
@@ -131,6 +132,7 @@ template <typename S> struct DataTpl {
   // M⁻¹x through the ABA factorization
   List<Vec6<S>> pz, az;
   VecX<S> Minv_x;
+  List<Vec6<S>> oUD;  ///< U/D of ABA in the world frame (dense M⁻¹, minv)
 
   // M⁻¹X for up to n right-hand sides at once (minv_apply_columns)
   using Block6 = Eigen::Matrix<S, 6, Eigen::Dynamic>;
