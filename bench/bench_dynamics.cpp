@@ -150,12 +150,18 @@ void BM_MinvApply(benchmark::State& state, const char* name) {
       [](DynamicsFixture& f) { benchmark::DoNotOptimize(minv_apply(model_of(f), *f.data, f.x).data()); });
 }
 
-// dense M⁻¹ from q as the FD derivatives get it: the ABA pass, then the sweeps of every unit load
+// dense M⁻¹ from q (as Pinocchio's computeMinverse)
 void BM_Minv(benchmark::State& state, const char* name) {
   time_kernel(state, name, [](DynamicsFixture& f) {
-    aba(model_of(f), *f.data, f.q, f.v, f.tau);
-    benchmark::DoNotOptimize(minv_matrix(model_of(f), *f.data).data());
+    benchmark::DoNotOptimize(minv_matrix(model_of(f), *f.data, f.q).data());
   });
+}
+
+// dense M⁻¹ after an ABA pass outside the loop (the sweeps of every unit load)
+void BM_MinvAfterAba(benchmark::State& state, const char* name) {
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { aba(model_of(f), *f.data, f.q, f.v, f.tau); },
+      [](DynamicsFixture& f) { benchmark::DoNotOptimize(minv_matrix_after_aba(model_of(f), *f.data).data()); });
 }
 
 // baseline of RNEA: qfrc_inverse at (qpos, qvel, qacc)
@@ -208,6 +214,7 @@ IDMPC_BENCH_MODELS(BM_RneaVjpSweepOnly);
 IDMPC_BENCH_MODELS(BM_MinvApply);
 IDMPC_BENCH_MODELS(BM_MjSolveM);
 IDMPC_BENCH_MODELS(BM_Minv);
+IDMPC_BENCH_MODELS(BM_MinvAfterAba);
 
 }  // namespace
 }  // namespace idmpc::bench

@@ -243,6 +243,18 @@ TEST_P(DynamicsTest, MassMatrixTimesInverseIsIdentity) {
     const double cond_scale = max_abs(M) * max_abs(Minv) * n();
     EXPECT_LE(max_abs(M * Minv - I) / cond_scale, kInverseRounding);
     EXPECT_LE(max_abs(Minv * M - I) / cond_scale, kInverseRounding);
+    // the dense inverse from q alone, and from the factorization of an aba pass
+    for (const char* how : {"minv_matrix", "minv_matrix_after_aba"}) {
+      if (std::string(how) == "minv_matrix") {
+        minv_matrix(model(), data, s.q);
+      } else {
+        aba(model(), data, s.q, s.v, s.tau);
+        minv_matrix_after_aba(model(), data);
+      }
+      const double scale = max_abs(M) * max_abs(data.Minv) * n();
+      EXPECT_LE(max_abs(M * data.Minv - I) / scale, kInverseRounding) << how;
+      EXPECT_LE(max_abs(data.Minv * M - I) / scale, kInverseRounding) << how;
+    }
     // the O(n) sweep gives the same inverse, column by column
     aba(model(), data, s.q, s.v, s.tau);
     for (int j = 0; j < n(); ++j) {

@@ -85,6 +85,7 @@ TEST_P(NoMallocTest, AlgorithmsDoNotAllocateAfterDataConstruction) {
   guarded("aba", [&] { aba(model, data, q, v, tau); });
   guarded("minv_apply", [&] { minv_apply(model, data, x); });
   guarded("crba", [&] { crba(model, data, q); });
+  guarded("minv_matrix", [&] { minv_matrix(model, data, q); });
   guarded("rnea_derivatives", [&] { rnea_derivatives(model, data, q, v, a); });
   guarded("aba_derivatives", [&] { aba_derivatives(model, data, q, v, tau); });
   // the guarded calls did real work

@@ -9,7 +9,8 @@
 namespace idmpc {
 
 /// @brief Forward dynamics q̈ = FD(q, v, τ); q, v, τ of size n. Returns data.qdd and leaves
-/// the articulated inertias (data.IA, U, D, Ud = U/D, Dinv = 1/D) for minv_apply and minv_matrix.
+/// the articulated inertias (data.IA, U, D, Ud = U/D, Dinv = 1/D) for minv_apply and
+/// minv_matrix_after_aba.
 template <typename S, typename Q, typename Vv, typename T>
 const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
@@ -141,72 +142,6 @@ template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& da
     Y.row(i) /= data.D[i];
     add_joint_motion(model, i, Y.row(i), A);
   }
-}
-
-namespace detail {
-
-/// @brief data.Minv ← M(q)⁻¹ from the ABA factorization at q (data.Ud, Dinv) and the world
-/// placements data.oX and axes data.oS at the same q. The ABA sweeps of minv_apply with the
-/// unit loads e_j, in the world frame, where forces and accelerations need no transform:
-/// backward, column j's load travels up j's ancestors only (the rows of M⁻¹'s upper triangle
-/// above j); forward, row i takes the columns j ≥ i, and the lower triangle is the mirror.
-template <typename S> void minv_world_sweeps(const Model& model, DataTpl<S>& data) {
-  const int n = model.n;
-  auto& Minv = data.Minv;
-  for (int i = 0; i < n; ++i) data.oUD[i] = data.oX[i].apply_transpose_force(data.Ud[i]);
-  // backward: articulated forces of the unit load at j, one 6-vector per column
-  Minv.setZero();
-  for (int j = 0; j < n; ++j) {
-    Minv(j, j) = data.Dinv[j];
-    Vec6<S> P = data.oUD[j];
-    for (int i = model.parent[j]; i >= 0; i = model.parent[i]) {
-      const S u = -data.oS[i].dot(P);
-      Minv(i, j) = u * data.Dinv[i];
-      P += data.oUD[i] * u;
-    }
-  }
-  // forward: accelerations of every column j ≥ i, root first
-  for (int i = 0; i < n; ++i) {
-    const int p = model.parent[i];
-    const Vec6<S>& Si = data.oS[i];
-    const Vec6<S>& UDi = data.oUD[i];
-    auto& Ai = data.Am[i];
-    if (p < 0) {
-      for (int j = i; j < n; ++j) Ai.col(j) = Si * Minv(i, j);
-    } else {
-      const auto& Ap = data.Am[p];
-      for (int j = i; j < n; ++j) {
-        const S y = Minv(i, j) - UDi.dot(Ap.col(j));
-        Minv(i, j) = y;
-        Ai.col(j) = Ap.col(j) + Si * y;
-      }
-    }
-  }
-  // symmetric: the lower triangle from the upper
-  for (int j = 0; j < n; ++j) {
-    for (int i = j + 1; i < n; ++i) Minv(i, j) = Minv(j, i);
-  }
-}
-
-}  // namespace detail
-
-/// @brief data.Minv ← M(q)⁻¹ (dense, n×n) in O(n·depth + n²) from the articulated inertias of
-/// the last aba(q, ·, ·) call, without forming M. Returns data.Minv; also leaves the world
-/// placements data.oX and axes data.oS at q.
-/// Precondition: data holds aba at q (checked in debug builds).
-template <typename S> const MatX<S>& minv_matrix(const Model& model, DataTpl<S>& data) {
-  IDMPC_DEBUG_CHECK(data.n == model.n, "minv_matrix: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
-                    "minv_matrix needs aba(model, data, q, v, tau) first, and no other algorithm "
-                    "at another q since");
-  // world placements and axes from the joint transforms of the aba pass
-  for (int i = 0; i < model.n; ++i) {
-    const int p = model.parent[i];
-    data.oX[i] = p < 0 ? data.X_up[i] : data.X_up[i] * data.oX[p];
-    data.oS[i] = motion_subspace_in<S>(model, i, data.oX[i]);
-  }
-  detail::minv_world_sweeps(model, data);
-  return data.Minv;
 }
 
 }  // namespace idmpc

@@ -12,6 +12,7 @@
 /// the adjoint mode): see the README.
 
 #include "idmpc/dynamics/aba.hpp"
+#include "idmpc/dynamics/minv.hpp"
 #include "idmpc/dynamics/rnea_derivatives.hpp"
 
 namespace idmpc {
@@ -30,7 +31,8 @@ void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen
   rnea_derivatives(model, data, q, v, data.qdd);  // same q: X_up unchanged for the sweeps
   // M⁻¹ by the ABA sweeps of the unit loads, in the world frame of the derivatives, then the
   // dense products
-  detail::minv_world_sweeps(model, data);
+  for (int i = 0; i < model.n; ++i) data.oUD[i] = data.oX[i].apply_transpose_force(data.Ud[i]);
+  detail::minv_world_sweeps(model, data, data.Dinv);
   data.da_dq.noalias() = -data.Minv * data.dtau_dq;
   data.da_dv.noalias() = -data.Minv * data.dtau_dv;
 }

@@ -20,7 +20,8 @@ template void aba_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                               const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
 template void rnea_vjp(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template void minv_apply_columns(const Model&, Data&, int);
-template const MatX<double>& minv_matrix(const Model&, Data&);
+template const MatX<double>& minv_matrix_after_aba(const Model&, Data&);
+template const MatX<double>& minv_matrix(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template struct DataTpl<double>;
 
 }  // namespace idmpc

@@ -88,7 +88,7 @@ template <typename S> struct DataTpl {
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oUD(n),
+        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
         rhs(MatX<S>::Zero(n, n)),
         passes(n) {}
@@ -132,7 +132,10 @@ template <typename S> struct DataTpl {
   // M⁻¹x through the ABA factorization
   List<Vec6<S>> pz, az;
   VecX<S> Minv_x;
-  List<Vec6<S>> oUD;  ///< U/D of ABA in the world frame (dense M⁻¹, minv)
+  // dense M⁻¹ (minv.hpp): articulated inertias, U/D and 1/D in the world frame
+  List<Mat6<S>> oYA;
+  List<Vec6<S>> oUD;
+  VecX<S> oDinv;
 
   // M⁻¹X for up to n right-hand sides at once (minv_apply_columns)
   using Block6 = Eigen::Matrix<S, 6, Eigen::Dynamic>;
