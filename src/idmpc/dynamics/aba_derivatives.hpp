@@ -28,7 +28,8 @@ void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen
   IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),
                     "aba_derivatives_after_aba needs aba(model, data, q, v, tau) at this (q, v) "
                     "first, and no other algorithm at another q since");
-  rnea_derivatives(model, data, q, v, data.qdd);  // same q: X_up unchanged for the sweeps
+  // same q: aba's joint transforms X_up are reused, no sin/cos again
+  detail::rnea_derivatives_impl<false>(model, data, q, v, data.qdd);
   // M⁻¹ by the ABA sweeps of the unit loads, in the world frame of the derivatives, then the
   // dense products
   for (int i = 0; i < model.n; ++i) data.oUD[i] = data.oX[i].apply_transpose_force(data.Ud[i]);
