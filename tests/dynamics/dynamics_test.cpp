@@ -379,6 +379,32 @@ TEST_P(DynamicsTest, RneaVjpIsTransposedDerivativesTimesW) {
   }
 }
 
+TEST_P(DynamicsTest, RneaAfterAbaIsRneaAtTheAbaResult) {
+  Data data(model()), ref(model());
+  std::mt19937 rng(GetParam().seed);
+  for (int k = 0; k < GetParam().samples; ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    const State s = random_state(rng);
+    const VecX<double> qdd = aba(model(), data, s.q, s.v, s.tau);
+    const VecX<double> w = random_vector(rng, 1.0);
+    rnea(model(), ref, s.q, s.v, qdd);
+    rnea_vjp(model(), ref, w);
+    const VecX<double> tau = rnea_after_aba(model(), data, s.q, s.v);
+    const double scale = max_abs(crba(model(), ref, s.q)) * max_abs(qdd);
+    EXPECT_LE(scaled_error(tau, ref.tau, std::max(scale, max_abs(ref.tau))), kRounding) << "tau";
+    EXPECT_LE(scaled_error(tau, s.tau, std::max(scale, max_abs(s.tau))), kRounding) << "tau of aba";
+    // the adjoint from it is the adjoint from rnea, and aba's factorization is still there
+    rnea_vjp(model(), data, w);
+    EXPECT_LE(scaled_error(data.g_q, ref.g_q, std::max(1.0, max_abs(ref.g_q))), kRounding) << "g_q";
+    EXPECT_LE(scaled_error(data.g_v, ref.g_v, std::max(1.0, max_abs(ref.g_v))), kRounding) << "g_v";
+    EXPECT_LE(scaled_error(data.g_a, ref.g_a, std::max(1.0, max_abs(ref.g_a))), kRounding) << "g_a";
+    const VecX<double> y = minv_apply(model(), data, w);
+    const MatX<double> M = crba(model(), ref, s.q);
+    EXPECT_LE(scaled_error(M * y, w, max_abs(M) * max_abs(y)), kRounding)
+        << "minv_apply after rnea_after_aba";
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Shipped, DynamicsTest, ::testing::ValuesIn(shipped_cases()), case_name);
 INSTANTIATE_TEST_SUITE_P(RandomTrees, DynamicsTest, ::testing::ValuesIn(random_tree_cases()),
                          case_name);

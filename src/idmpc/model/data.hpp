@@ -12,7 +12,7 @@
 namespace idmpc {
 
 /// @brief Which algorithm's results a Data holds, for the debug checks of the call-order
-/// preconditions (rnea_vjp after rnea; minv_apply, minv_apply_columns and
+/// preconditions (rnea_vjp after rnea or rnea_after_aba; minv_apply, minv_apply_columns and
 /// aba_derivatives_after_aba after aba, at the same point). Written and read only when
 /// IDMPC_DEBUG_CHECKS; always present, so that Data's layout does not depend on the build type.
 template <typename S> class PassRecord {
@@ -42,6 +42,14 @@ template <typename S> class PassRecord {
       aba_v_ = v;
       aba_ = true;
       rnea_ = false;
+    }
+  }
+
+  /// rnea_after_aba completed rnea's buffers at the point of the aba pass (aba's stay valid)
+  void rnea_after_aba() {
+    if constexpr (kOn) {
+      rnea_q_ = aba_q_;
+      rnea_ = true;
     }
   }
 
