@@ -9,8 +9,9 @@
 namespace idmpc {
 
 /// @brief Forward dynamics q̈ = FD(q, v, τ); q, v, τ of size n. Returns data.qdd and leaves
-/// the articulated inertias (data.IA, U, D, Ud = U/D, Dinv = 1/D) for minv_apply and
-/// minv_matrix_after_aba.
+/// the articulated inertias (data.IA, U, D, and Ud = U/D, Dinv = 1/D) for minv_apply and
+/// minv_matrix_after_aba. ABA itself and minv_apply divide by D, as they always did: their
+/// rounding is what the FD controllers' tests were measured with.
 template <typename S, typename Q, typename Vv, typename T>
 const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
@@ -36,13 +37,13 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
     const int p = model.parent[i];
     data.U[i] = times_motion_subspace<S>(model, i, data.IA[i]);
     data.D[i] = joint_project<S>(model, i, data.U[i]) + armature_passive_partials(model, i).da;
-    data.Dinv[i] = S(1) / data.D[i];
+    data.Dinv[i] = S(1) / data.D[i];  // for the sweeps of the dense M⁻¹ (minv.hpp)
     data.Ud[i] = data.U[i] * data.Dinv[i];
     data.u[i] = tau[i] - joint_project<S>(model, i, data.pA[i]) -
                 armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(0));
     if (p >= 0) {
-      const Mat6<S> Ia = data.IA[i] - data.U[i] * data.Ud[i].transpose();
-      const Vec6<S> pa = data.pA[i] + Ia * data.c[i] + data.Ud[i] * data.u[i];
+      const Mat6<S> Ia = data.IA[i] - data.U[i] * data.U[i].transpose() / data.D[i];
+      const Vec6<S> pa = data.pA[i] + Ia * data.c[i] + data.U[i] * (data.u[i] / data.D[i]);
       data.IA[p] += congruence_to_parent<S>(Ia, data.X_up[i]);
       data.pA[p] += data.X_up[i].apply_transpose_force(pa);
     }
@@ -52,7 +53,7 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
     const Vec6<S> ap = data.X_up[i].apply_motion(p < 0 ? a0 : data.A[p]) + data.c[i];
-    data.qdd[i] = (data.u[i] - data.U[i].dot(ap)) * data.Dinv[i];
+    data.qdd[i] = (data.u[i] - data.U[i].dot(ap)) / data.D[i];
     data.A[i] = ap;
     add_joint_motion(model, i, data.qdd[i], data.A[i]);
   }
@@ -73,17 +74,17 @@ const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::Mat
   // backward: articulated bias forces of the load x
   for (int i = n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    const S ui = x[i] - joint_project<S>(model, i, data.pz[i]);
-    data.Minv_x[i] = ui * data.Dinv[i];
+    data.Minv_x[i] = x[i] - joint_project<S>(model, i, data.pz[i]);
     if (p >= 0) {
-      data.pz[p] += data.X_up[i].apply_transpose_force(Vec6<S>(data.pz[i] + data.Ud[i] * ui));
+      data.pz[p] += data.X_up[i].apply_transpose_force(
+          Vec6<S>(data.pz[i] + data.U[i] * (data.Minv_x[i] / data.D[i])));
     }
   }
   // forward: accelerations
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
     const Vec6<S> ap = p < 0 ? Vec6<S>::Zero() : data.X_up[i].apply_motion(data.az[p]);
-    data.Minv_x[i] -= data.Ud[i].dot(ap);
+    data.Minv_x[i] = (data.Minv_x[i] - data.U[i].dot(ap)) / data.D[i];
     data.az[i] = ap;
     add_joint_motion(model, i, data.Minv_x[i], data.az[i]);
   }

@@ -111,7 +111,7 @@ template <typename S> struct DataTpl {
   VecX<S> tau;  ///< rnea output
   VecX<S> qdd;  ///< aba output
 
-  // ABA (Featherstone Table 7.1); Ud = U/D and Dinv = 1/D, so that no sweep divides
+  // ABA (Featherstone Table 7.1); Ud = U/D and Dinv = 1/D for the sweeps of the dense M⁻¹
   List<Mat6<S>> IA;
   List<Vec6<S>> pA, U, c, Ud;
   VecX<S> D, Dinv, u;
