@@ -150,6 +150,20 @@ void BM_MinvApply(benchmark::State& state, const char* name) {
       [](DynamicsFixture& f) { benchmark::DoNotOptimize(minv_apply(model_of(f), *f.data, f.x).data()); });
 }
 
+// dense M⁻¹ from q (as Pinocchio's computeMinverse)
+void BM_Minv(benchmark::State& state, const char* name) {
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    benchmark::DoNotOptimize(minv_matrix(model_of(f), *f.data, f.q).data());
+  });
+}
+
+// dense M⁻¹ after an ABA pass outside the loop (the sweeps of every unit load)
+void BM_MinvAfterAba(benchmark::State& state, const char* name) {
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { aba(model_of(f), *f.data, f.q, f.v, f.tau); },
+      [](DynamicsFixture& f) { benchmark::DoNotOptimize(minv_matrix_after_aba(model_of(f), *f.data).data()); });
+}
+
 // baseline of RNEA: qfrc_inverse at (qpos, qvel, qacc)
 void BM_MjInverse(benchmark::State& state, const char* name) {
   time_kernel(state, name, [](DynamicsFixture& f) {
@@ -166,6 +180,16 @@ void BM_MjForward(benchmark::State& state, const char* name) {
   });
 }
 
+// baseline of M⁻¹x: MuJoCo's solve with the sparse LTDL factor of one mj_forward outside the loop
+void BM_MjSolveM(benchmark::State& state, const char* name) {
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { mj_forward(f.m.get(), f.d.get()); },
+      [](DynamicsFixture& f) {
+        mj_solveM(f.m.get(), f.d.get(), f.d->qfrc_smooth, f.x.data(), 1);
+        benchmark::DoNotOptimize(f.d->qfrc_smooth);
+      });
+}
+
 // one case per model: the paper's arm and chains, plus two larger generated chains
 #define IDMPC_BENCH_MODELS(BM)             \
   BENCHMARK_CAPTURE(BM, arm4, "arm4");     \
@@ -174,7 +198,9 @@ void BM_MjForward(benchmark::State& state, const char* name) {
   BENCHMARK_CAPTURE(BM, chain24, "chain24"); \
   BENCHMARK_CAPTURE(BM, chain32, "chain32"); \
   BENCHMARK_CAPTURE(BM, chain48, "chain48"); \
-  BENCHMARK_CAPTURE(BM, chain64, "chain64")
+  BENCHMARK_CAPTURE(BM, chain64, "chain64");               \
+  BENCHMARK_CAPTURE(BM, chain8_spatial, "chain8_spatial");   \
+  BENCHMARK_CAPTURE(BM, chain32_spatial, "chain32_spatial")
 
 IDMPC_BENCH_MODELS(BM_Rnea);
 IDMPC_BENCH_MODELS(BM_MjInverse);
@@ -186,6 +212,9 @@ IDMPC_BENCH_MODELS(BM_AbaDerivatives);
 IDMPC_BENCH_MODELS(BM_RneaVjp);
 IDMPC_BENCH_MODELS(BM_RneaVjpSweepOnly);
 IDMPC_BENCH_MODELS(BM_MinvApply);
+IDMPC_BENCH_MODELS(BM_MjSolveM);
+IDMPC_BENCH_MODELS(BM_Minv);
+IDMPC_BENCH_MODELS(BM_MinvAfterAba);
 
 }  // namespace
 }  // namespace idmpc::bench

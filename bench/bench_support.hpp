@@ -35,9 +35,10 @@ struct BenchModel {
 /// "arm4" for n = 4 (the paper's 4-link arm), "chain<n>" otherwise.
 inline std::string chain_name(int n) { return n == 4 ? "arm4" : "chain" + std::to_string(n); }
 
-/// MJCF text of the n-link chain written by tools/gen_chain.py.
-inline std::string generate_chain(int n) {
-  const std::string cmd = "/usr/bin/python3 " IDMPC_SOURCE_DIR "/tools/gen_chain.py -n " + std::to_string(n);
+/// MJCF text of the n-link chain written by tools/gen_chain.py (alternating axes if spatial).
+inline std::string generate_chain(int n, bool spatial = false) {
+  const std::string cmd = "/usr/bin/python3 " IDMPC_SOURCE_DIR "/tools/gen_chain.py -n " +
+                          std::to_string(n) + (spatial ? " --nonplanar" : "");
   FILE* pipe = popen(cmd.c_str(), "r");
   if (!pipe) throw std::runtime_error("could not run " + cmd);
   std::string xml;
@@ -47,7 +48,8 @@ inline std::string generate_chain(int n) {
   return xml;
 }
 
-/// The model "arm4" or "chain<n>": mjcf/<name>.xml if it exists, else generated. Cached.
+/// The model "arm4", "chain<n>" or "chain<n>_spatial": mjcf/<name>.xml if it exists, else
+/// generated. Cached.
 inline const BenchModel& bench_model(const std::string& name) {
   static std::map<std::string, std::unique_ptr<BenchModel>> cache;
   auto& slot = cache[name];
@@ -57,7 +59,8 @@ inline const BenchModel& bench_model(const std::string& name) {
     if (std::ifstream(path).good()) {
       m = mj::load_model(path);
     } else if (name.rfind("chain", 0) == 0) {
-      m = mj::load_model_from_string(generate_chain(std::stoi(name.substr(5))));
+      const bool spatial = name.size() > 8 && name.compare(name.size() - 8, 8, "_spatial") == 0;
+      m = mj::load_model_from_string(generate_chain(std::stoi(name.substr(5)), spatial));
     } else {
       throw std::invalid_argument("no model file " + path);
     }

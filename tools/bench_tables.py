@@ -97,7 +97,7 @@ def parse_dynamics(runs):
     out = {}
     for b in runs:
         m = re.match(r"^BM_(\w+)/(\w+)$", b["name"])
-        if not m or seconds(b) is None:
+        if not m or seconds(b) is None or "_spatial" in m.group(2):  # tables: planar chains
             continue
         out.setdefault(m.group(1), {})[int(b["n"])] = seconds(b)
     return out

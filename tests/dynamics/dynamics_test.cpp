@@ -243,6 +243,18 @@ TEST_P(DynamicsTest, MassMatrixTimesInverseIsIdentity) {
     const double cond_scale = max_abs(M) * max_abs(Minv) * n();
     EXPECT_LE(max_abs(M * Minv - I) / cond_scale, kInverseRounding);
     EXPECT_LE(max_abs(Minv * M - I) / cond_scale, kInverseRounding);
+    // the dense inverse from q alone, and from the factorization of an aba pass
+    for (const char* how : {"minv_matrix", "minv_matrix_after_aba"}) {
+      if (std::string(how) == "minv_matrix") {
+        minv_matrix(model(), data, s.q);
+      } else {
+        aba(model(), data, s.q, s.v, s.tau);
+        minv_matrix_after_aba(model(), data);
+      }
+      const double scale = max_abs(M) * max_abs(data.Minv) * n();
+      EXPECT_LE(max_abs(M * data.Minv - I) / scale, kInverseRounding) << how;
+      EXPECT_LE(max_abs(data.Minv * M - I) / scale, kInverseRounding) << how;
+    }
     // the O(n) sweep gives the same inverse, column by column
     aba(model(), data, s.q, s.v, s.tau);
     for (int j = 0; j < n(); ++j) {
@@ -364,6 +376,32 @@ TEST_P(DynamicsTest, RneaVjpIsTransposedDerivativesTimesW) {
       EXPECT_LE(scaled_error(data.g_v, g_v_ref, max_abs(dtau_dv) * wn), kRounding) << "g_v";
       EXPECT_LE(scaled_error(data.g_a, g_a_ref, max_abs(M) * wn), kRounding) << "g_a";
     }
+  }
+}
+
+TEST_P(DynamicsTest, RneaAfterAbaIsRneaAtTheAbaResult) {
+  Data data(model()), ref(model());
+  std::mt19937 rng(GetParam().seed);
+  for (int k = 0; k < GetParam().samples; ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    const State s = random_state(rng);
+    const VecX<double> qdd = aba(model(), data, s.q, s.v, s.tau);
+    const VecX<double> w = random_vector(rng, 1.0);
+    rnea(model(), ref, s.q, s.v, qdd);
+    rnea_vjp(model(), ref, w);
+    const VecX<double> tau = rnea_after_aba(model(), data, s.q, s.v);
+    const double scale = max_abs(crba(model(), ref, s.q)) * max_abs(qdd);
+    EXPECT_LE(scaled_error(tau, ref.tau, std::max(scale, max_abs(ref.tau))), kRounding) << "tau";
+    EXPECT_LE(scaled_error(tau, s.tau, std::max(scale, max_abs(s.tau))), kRounding) << "tau of aba";
+    // the adjoint from it is the adjoint from rnea, and aba's factorization is still there
+    rnea_vjp(model(), data, w);
+    EXPECT_LE(scaled_error(data.g_q, ref.g_q, std::max(1.0, max_abs(ref.g_q))), kRounding) << "g_q";
+    EXPECT_LE(scaled_error(data.g_v, ref.g_v, std::max(1.0, max_abs(ref.g_v))), kRounding) << "g_v";
+    EXPECT_LE(scaled_error(data.g_a, ref.g_a, std::max(1.0, max_abs(ref.g_a))), kRounding) << "g_a";
+    const VecX<double> y = minv_apply(model(), data, w);
+    const MatX<double> M = crba(model(), ref, s.q);
+    EXPECT_LE(scaled_error(M * y, w, max_abs(M) * max_abs(y)), kRounding)
+        << "minv_apply after rnea_after_aba";
   }
 }
 

@@ -84,7 +84,9 @@ TEST_P(NoMallocTest, AlgorithmsDoNotAllocateAfterDataConstruction) {
   guarded("rnea_vjp", [&] { rnea_vjp(model, data, w); });
   guarded("aba", [&] { aba(model, data, q, v, tau); });
   guarded("minv_apply", [&] { minv_apply(model, data, x); });
+  guarded("rnea_after_aba", [&] { rnea_after_aba(model, data, q, v); });
   guarded("crba", [&] { crba(model, data, q); });
+  guarded("minv_matrix", [&] { minv_matrix(model, data, q); });
   guarded("rnea_derivatives", [&] { rnea_derivatives(model, data, q, v, a); });
   guarded("aba_derivatives", [&] { aba_derivatives(model, data, q, v, tau); });
   // the guarded calls did real work

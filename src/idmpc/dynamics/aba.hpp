@@ -9,7 +9,9 @@
 namespace idmpc {
 
 /// @brief Forward dynamics q̈ = FD(q, v, τ); q, v, τ of size n. Returns data.qdd and leaves
-/// the articulated inertias (data.IA, U, D) for minv_apply.
+/// the articulated inertias (data.IA, U, D, and Ud = U/D, Dinv = 1/D) for minv_apply and
+/// minv_matrix_after_aba. ABA itself and minv_apply divide by D, as they always did: their
+/// rounding is what the FD controllers' tests were measured with.
 template <typename S, typename Q, typename Vv, typename T>
 const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
@@ -35,6 +37,8 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
     const int p = model.parent[i];
     data.U[i] = times_motion_subspace<S>(model, i, data.IA[i]);
     data.D[i] = joint_project<S>(model, i, data.U[i]) + armature_passive_partials(model, i).da;
+    data.Dinv[i] = S(1) / data.D[i];  // for the sweeps of the dense M⁻¹ (minv.hpp)
+    data.Ud[i] = data.U[i] * data.Dinv[i];
     data.u[i] = tau[i] - joint_project<S>(model, i, data.pA[i]) -
                 armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(0));
     if (p >= 0) {

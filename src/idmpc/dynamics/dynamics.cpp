@@ -11,6 +11,8 @@ template const Vd& rnea(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
 template const Vd& aba(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                        const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
 template const Vd& minv_apply(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
+template const Vd& rnea_after_aba(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
+                                  const Eigen::MatrixBase<Vd>&);
 template const MatX<double>& crba(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template void rnea_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                                const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
@@ -20,6 +22,8 @@ template void aba_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                               const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
 template void rnea_vjp(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template void minv_apply_columns(const Model&, Data&, int);
+template const MatX<double>& minv_matrix_after_aba(const Model&, Data&);
+template const MatX<double>& minv_matrix(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template struct DataTpl<double>;
 
 }  // namespace idmpc

@@ -46,4 +46,35 @@ const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
   return data.tau;
 }
 
+/// @brief τ = ID(q, v, q̈) at the point (q, v) of the last aba call, q̈ = data.qdd (so τ is
+/// the aba's torque up to rounding), reusing aba's link kinematics: its joint transforms,
+/// velocities and the accelerations of its last pass are rnea's at that point. Only the body
+/// forces and the backward pass remain. Leaves data as rnea(q, v, data.qdd) would, for
+/// rnea_vjp, and keeps aba's factorization for minv_apply. Returns data.tau.
+/// Precondition: data holds aba at (q, v) (checked in debug builds).
+template <typename S, typename Q, typename Vv>
+const VecX<S>& rnea_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                              const Eigen::MatrixBase<Vv>& v) {
+  IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n && v.size() == model.n,
+                    "rnea_after_aba: q, v must have size model.n");
+  IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),
+                    "rnea_after_aba needs aba(model, data, q, v, tau) at this (q, v) first, and no "
+                    "other algorithm at another q since");
+  data.passes.rnea_after_aba();
+  // body forces
+  for (int i = 0; i < model.n; ++i) {
+    const auto& Ii = cast_inertia<S>(model.I[i]);
+    data.h[i] = Ii.apply(data.V[i]);
+    data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
+  }
+  // backward pass: joint torques, subtree forces, armature and passive forces
+  for (int i = model.n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    data.tau[i] = joint_project<S>(model, i, data.F[i]) +
+                  armature_and_passive<S>(model, i, S(q[i]), S(v[i]), data.qdd[i]);
+    if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
+  }
+  return data.tau;
+}
+
 }  // namespace idmpc

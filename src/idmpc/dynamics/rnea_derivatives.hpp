@@ -34,20 +34,23 @@ Mat6<S> coriolis_matrix(const Inertia<S>& I, const Vec6<S>& v, const Vec6<S>& h)
   return B;
 }
 
-/// @brief Fills data.dtau_dq, data.dtau_dv, data.M (= ∂τ/∂a) and data.tau at (q, v, a).
-template <typename S, typename Q, typename Vv, typename Aa>
-void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
-                      const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+namespace detail {
+
+/// @brief rnea_derivatives; with kJointTransforms = false, data.X_up must already hold the
+/// joint transforms at q (e.g. after aba at q), and they are not recomputed.
+template <bool kJointTransforms, typename S, typename Q, typename Vv, typename Aa>
+void rnea_derivatives_impl(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                           const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
   IDMPC_DEBUG_CHECK(data.n == model.n, "rnea_derivatives: data was made for a model of another size");
   IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
                     "rnea_derivatives: q, v, a must have size model.n");
-  data.passes.kinematics(q);
+  if constexpr (kJointTransforms) data.passes.kinematics(q);
   const int n = model.n;
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass in the world frame: placements, axes, velocities, accelerations, forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
-    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    if constexpr (kJointTransforms) data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
     data.oX[i] = p < 0 ? data.X_up[i] : data.X_up[i] * data.oX[p];
     data.oS[i] = data.oX[i].apply_inverse_motion(motion_subspace<S>(model, i));
     const Vec6<S> vJ = data.oS[i] * v[i];
@@ -101,6 +104,15 @@ void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixB
     data.dtau_dv(i, i) += d.dv;
     data.M(i, i) += d.da;
   }
+}
+
+}  // namespace detail
+
+/// @brief Fills data.dtau_dq, data.dtau_dv, data.M (= ∂τ/∂a) and data.tau at (q, v, a).
+template <typename S, typename Q, typename Vv, typename Aa>
+void rnea_derivatives(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                      const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  detail::rnea_derivatives_impl<true>(model, data, q, v, a);
 }
 
 }  // namespace idmpc

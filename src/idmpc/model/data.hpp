@@ -12,7 +12,7 @@
 namespace idmpc {
 
 /// @brief Which algorithm's results a Data holds, for the debug checks of the call-order
-/// preconditions (rnea_vjp after rnea; minv_apply, minv_apply_columns and
+/// preconditions (rnea_vjp after rnea or rnea_after_aba; minv_apply, minv_apply_columns and
 /// aba_derivatives_after_aba after aba, at the same point). Written and read only when
 /// IDMPC_DEBUG_CHECKS; always present, so that Data's layout does not depend on the build type.
 template <typename S> class PassRecord {
@@ -42,6 +42,14 @@ template <typename S> class PassRecord {
       aba_v_ = v;
       aba_ = true;
       rnea_ = false;
+    }
+  }
+
+  /// rnea_after_aba completed rnea's buffers at the point of the aba pass (aba's stay valid)
+  void rnea_after_aba() {
+    if constexpr (kOn) {
+      rnea_q_ = aba_q_;
+      rnea_ = true;
     }
   }
 
@@ -79,7 +87,8 @@ template <typename S> struct DataTpl {
       : n(model.n),
         X_up(n), V(n), A(n), F(n), h(n), vJ(n),
         tau(VecX<S>::Zero(n)), qdd(VecX<S>::Zero(n)),
-        IA(n), pA(n), U(n), c(n), D(VecX<S>::Zero(n)), u(VecX<S>::Zero(n)),
+        IA(n), pA(n), U(n), c(n), Ud(n), D(VecX<S>::Zero(n)), Dinv(VecX<S>::Zero(n)),
+        u(VecX<S>::Zero(n)),
         Ic(n), M(MatX<S>::Zero(n, n)),
         oX(n), oS(n), oV(n), oA(n), oI(n), oB(n), oF(n), IcS(n), BcS(n), psi(n), w(n), G(n), H(n),
         dtau_dq(MatX<S>::Zero(n, n)), dtau_dv(MatX<S>::Zero(n, n)),
@@ -87,7 +96,7 @@ template <typename S> struct DataTpl {
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Minv_x(VecX<S>::Zero(n)),
+        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
         rhs(MatX<S>::Zero(n, n)),
         passes(n) {}
@@ -102,10 +111,10 @@ template <typename S> struct DataTpl {
   VecX<S> tau;  ///< rnea output
   VecX<S> qdd;  ///< aba output
 
-  // ABA (Featherstone Table 7.1)
+  // ABA (Featherstone Table 7.1); Ud = U/D and Dinv = 1/D for the sweeps of the dense M⁻¹
   List<Mat6<S>> IA;
-  List<Vec6<S>> pA, U, c;
-  VecX<S> D, u;
+  List<Vec6<S>> pA, U, c, Ud;
+  VecX<S> D, Dinv, u;
 
   // CRBA
   List<Inertia<S>> Ic;
@@ -131,6 +140,10 @@ template <typename S> struct DataTpl {
   // M⁻¹x through the ABA factorization
   List<Vec6<S>> pz, az;
   VecX<S> Minv_x;
+  // dense M⁻¹ (minv.hpp): articulated inertias, U/D and 1/D in the world frame
+  List<Mat6<S>> oYA;
+  List<Vec6<S>> oUD;
+  VecX<S> oDinv;
 
   // M⁻¹X for up to n right-hand sides at once (minv_apply_columns)
   using Block6 = Eigen::Matrix<S, 6, Eigen::Dynamic>;

@@ -61,6 +61,28 @@ template <typename S> Vec6<S> motion_subspace(const Model& model, int i) {
   return s;
 }
 
+/// @brief S_i in the coordinates of frame 0, given X0 = ^iX_0 (frame 0 → link i): X0⁻¹ S_i,
+/// without the products by S's zero half (and none at all for the axis of an axis-aligned hinge).
+template <typename S> Vec6<S> motion_subspace_in(const Model& model, int i, const Transform<S>& X0) {
+  Vec6<S> out;
+  const int k = model.axis_index[i];
+  Vec3<S> s;
+  if (k >= 0) {
+    s = X0.E.row(k).transpose();
+    if (model.axis[i][k] < 0) s = -s;
+  } else {
+    s = X0.E.transpose() * model.axis[i].template cast<S>();
+  }
+  if (model.joint_type[i] == JointType::kRevolute) {
+    out.template head<3>() = s;
+    out.template tail<3>() = cross3<S>(X0.r, s);
+  } else {
+    out.template head<3>().setZero();
+    out.template tail<3>() = s;
+  }
+  return out;
+}
+
 /// @brief m += S_i·x: x a joint-space scalar and m a 6-vector, or x a 1×k row and m a 6×k
 /// block (k motions at once).
 template <typename X, typename Dst>

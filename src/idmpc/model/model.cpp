@@ -72,6 +72,14 @@ std::vector<int> axis_indices(const std::vector<Link>& links) {
   return out;
 }
 
+int count_ancestor_pairs(const std::vector<Link>& links) {
+  int pairs = 0;
+  for (const Link& l : links) {
+    for (int j = l.parent; j >= 0; j = links[static_cast<size_t>(j)].parent) ++pairs;
+  }
+  return pairs;
+}
+
 }  // namespace
 
 Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
@@ -90,7 +98,8 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       gravity(world_gravity),
       joint_names(gather(links, &Link::joint_name)),
       name(std::move(model_name)),
-      axis_index(axis_indices(links)) {}
+      axis_index(axis_indices(links)),
+      ancestor_pairs(count_ancestor_pairs(links)) {}
 
 Link Model::link(int i) const {
   Link l;

@@ -66,6 +66,9 @@ class Model {
 
   /// derived: k ∈ {0, 1, 2} if axis[i] = ±e_k (the joint transform's fast path), else −1
   const std::vector<int> axis_index;
+  /// derived: Σ_i (number of ancestors of link i), the (i, ancestor) pairs that the
+  /// O(n·depth) algorithms visit
+  const int ancestor_pairs;
 
   /// @brief Link i as given to the constructor (to rebuild a variant of this model).
   Link link(int i) const;

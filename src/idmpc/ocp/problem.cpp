@@ -145,7 +145,7 @@ void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In d, In rho, 
       const VecX<double>& mu = minv_apply(model_, data, gmm_next);  // ABA factorization of stage i
       hu = w_ + mu;
       if (state) {
-        rnea(model_, data, q, v, a);
+        rnea_after_aba(model_, data, q, v);  // a = data.qdd: the stage's aba pass, completed
         rnea_vjp(model_, data, mu);
         gq_ = -data.g_q;
         gv_ = -data.g_v;

@@ -178,13 +178,28 @@ template <typename S> struct Inertia {
     return *this;
   }
   /// @brief Re-express an inertia given in B-coordinates (X: A→B) in A-coordinates: Xᵀ I X.
+  ///
+  /// Ibar' = Eᵀ Ibar E − [y]×[r]× − [r]×[y]× − m [r]×[r]× with y = Eᵀh; by
+  /// [a]×[b]× = b aᵀ − (a·b) 1 the translation part is 2 (g·r) 1 − r gᵀ − g rᵀ, g = y + m r / 2.
+  /// Only the upper triangle is computed (Ibar is symmetric): 45 + 18 multiplications.
   Inertia transformed_to_parent(const Transform<S>& X) const {
     Inertia out;
     out.m = m;
-    const Vec3<S> y = X.E.transpose() * h;
-    out.h = y + m * X.r;
-    const Mat3<S> R = skew<S>(X.r), Y = skew<S>(y);
-    out.Ibar = X.E.transpose() * Ibar * X.E - Y * R - R * Y - m * R * R;
+    const Mat3<S>& E = X.E;
+    const Vec3<S>& r = X.r;
+    const Vec3<S> y = E.transpose() * h;
+    out.h = y + m * r;
+    const Vec3<S> g = y + (S(0.5) * m) * r;
+    const S gr2 = S(2) * g.dot(r);
+    const Mat3<S> T = Ibar * E;  // Eᵀ Ibar E = Eᵀ T
+    for (int a = 0; a < 3; ++a) {
+      for (int b = a; b < 3; ++b) {
+        S x = E(0, a) * T(0, b) + E(1, a) * T(1, b) + E(2, a) * T(2, b) - r[a] * g[b] - g[a] * r[b];
+        if (a == b) x += gr2;
+        out.Ibar(a, b) = x;
+        out.Ibar(b, a) = x;
+      }
+    }
     return out;
   }
   /// @brief Dense 6×6 matrix.
