@@ -28,6 +28,7 @@ template <typename S> void minv_world_sweeps(const Model& model, DataTpl<S>& dat
     for (int k = 0; k < kColumns; ++k) {
       const int j = j0 + k;
       at[k] = -1;
+      P[k].setZero();  // unused past n; set so that no path reads it uninitialized
       if (j >= n) continue;
       Minv(j, j) = Dinv[j];
       P[k] = data.oUD[j];
