@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "app/commands.hpp"
+#include "app/output_paths.hpp"
 
 #ifdef IDMPC_HAVE_RENDER
 #include "idmpc/render/progress_printer.hpp"
@@ -51,6 +52,9 @@ void run_render(const RenderArgs& args) {
   options.camera = args.camera;
   options.overlay = !args.no_overlay;
   render::check_video_options(options);
+  std::vector<NamedPath> inputs{{"model", args.model}, {"--log", args.log}};
+  for (const std::string& path : args.compare) inputs.push_back({"--compare", path});
+  check_output_paths(inputs, {{"--out", args.out}});
   render::check_output_writable(args.out);
 
   std::vector<render::RunLog> runs;
@@ -58,6 +62,9 @@ void run_render(const RenderArgs& args) {
     runs.push_back(render::read_run_log(args.log));
   } else {
     for (const auto& path : args.compare) runs.push_back(render::read_run_log(path));
+  }
+  for (const render::RunLog& run : runs) {
+    if (!run.summary_warning.empty()) std::cerr << "idmpc: warning: " << run.summary_warning << "\n";
   }
 
   // "rendering x.mp4: 42%" on stderr: in place on a terminal, every 10% otherwise

@@ -160,6 +160,8 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   s.saturated_any = result.saturated_any;
   s.max_constraint_violation = result.max_constraint_violation;
   if (s.diverged) s.divergence_hint = divergence_hint(task);
+  s.model_hash = file_hash(task.model);  // render checks a log's model and summary by these
+  s.log_hash = file_hash(log_path);
   return SwingupOutcome{std::move(result), std::move(s)};
 }
 

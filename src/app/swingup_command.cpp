@@ -6,10 +6,12 @@
 
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
+#include "app/output_paths.hpp"
 #include "app/swingup.hpp"
 #ifdef IDMPC_HAVE_RENDER
 #include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/video.hpp"
+#include "idmpc/render/video_writer.hpp"
 #endif
 
 namespace idmpc::app {
@@ -27,18 +29,27 @@ void register_swingup(CLI::App& app) {
   sub->add_option("--summary", opt->summary, "JSON summary");
   sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)");
   sub->callback([opt] {
-    // fail on unwritable paths before the run
+    const Task task = make_task(opt->run);
+    // outputs checked before the run: none is an input or another output, a directory or
+    // unwritable, and a video has its encoder
+    check_output_paths({{"model", task.model}, {"--task", opt->run.task_file}},
+                       {{"--log", opt->log}, {"--summary", opt->summary}, {"--video", opt->video}});
+    if (!opt->log.empty()) AtomicFile probe(opt->log);
     if (!opt->summary.empty()) AtomicFile probe(opt->summary);
 #ifndef IDMPC_HAVE_RENDER
     if (!opt->video.empty()) throw std::runtime_error("--video: this build has no renderer (IDMPC_BUILD_RENDER=OFF)");
 #else
-    if (!opt->video.empty()) AtomicFile probe(opt->video);
+    if (!opt->video.empty()) {
+      render::check_output_writable(opt->video);
+      if (render::find_on_path("ffmpeg").empty()) {
+        throw std::runtime_error("--video '" + opt->video + "': ffmpeg not found on PATH: install the Debian package ffmpeg");
+      }
+    }
 #endif
     // a video needs a log: without --log, a temporary one beside the video
     std::string log = opt->log;
     const bool temporary_log = log.empty() && !opt->video.empty();
     if (temporary_log) log = opt->video + ".log." + std::to_string(::getpid()) + ".csv";
-    const Task task = make_task(opt->run);
     SwingupOutcome out = run_swingup(task, log, opt->run.fallback);
     if (!opt->summary.empty()) write_json(to_json(out.summary), opt->summary);
     std::cout << human_summary(out.summary);

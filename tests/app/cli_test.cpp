@@ -10,7 +10,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <iterator>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -19,6 +21,7 @@
 #include <fstream>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -27,6 +30,7 @@
 #include <nlohmann/json.hpp>
 
 #include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/experiment/run_record.hpp"
 #include "idmpc/mujoco/check.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
@@ -42,6 +46,14 @@ namespace fs = std::filesystem;
 const std::string kBinary = std::getenv("IDMPC_TEST_BINARY") ? std::getenv("IDMPC_TEST_BINARY") : IDMPC_BINARY;
 const std::string kArm4 = IDMPC_SOURCE_DIR "/mjcf/arm4.xml";
 const std::string kTree = IDMPC_SOURCE_DIR "/mjcf/tree.xml";
+
+// a cap on virtual memory (KiB) for commands that, without their fix, would exhaust memory;
+// none under AddressSanitizer, which reserves terabytes of address space for its shadow
+#ifdef __SANITIZE_ADDRESS__
+const std::string kMemoryCap;
+#else
+const std::string kMemoryCap = "ulimit -v 3000000;";
+#endif
 
 // the dynamics command prints 17 significant digits; our RNEA/ABA agree with MuJoCo to ~1e-14
 // (`idmpc check`'s tolerance is 1e-10)
@@ -427,6 +439,9 @@ TEST_F(Cli, SwingupWritesLogAndSummary) {
   const nlohmann::json& task = s["task"];
   EXPECT_EQ(task["model"], kArm4);
   EXPECT_EQ(s["n"], 4);
+  // the model and the log as hashed bytes: render checks a log's model and summary by them
+  EXPECT_EQ(s.value("model_hash", ""), file_hash(kArm4));
+  EXPECT_EQ(s.value("log_hash", ""), file_hash((dir_ / "log.csv").string()));
   EXPECT_EQ(task["formulation"], "id");
   EXPECT_EQ(task["derivatives"], "adjoint");
   EXPECT_EQ(task["cgmres"]["N"], 25);
@@ -722,6 +737,69 @@ TEST_F(Cli, HelpAndVersionExitZero) {
   EXPECT_TRUE(std::regex_search(v.out, std::regex("^idmpc [0-9.]+ \\(MuJoCo [0-9.]+\\)\n$"))) << v.out;
 }
 
+// the README's synopsis and each command's --help list the same options
+class CliSynopsis : public Cli, public ::testing::WithParamInterface<std::string> {};
+
+std::set<std::string> long_options(const std::string& text) {
+  std::set<std::string> names;
+  const std::regex option("--[A-Za-z][A-Za-z0-9-]*");
+  for (std::sregex_iterator it(text.begin(), text.end(), option), end; it != end; ++it) names.insert(it->str());
+  return names;
+}
+
+// the options `idmpc <command> --help` lists: the first field of each line of its Options section
+std::set<std::string> help_options(const std::string& help) {
+  std::set<std::string> names;
+  bool in_options = false;
+  for (const std::string& line : lines_of(help)) {
+    if (line.rfind("Options:", 0) == 0) in_options = true;
+    else if (!line.empty() && line[0] != ' ') in_options = false;
+    if (!in_options || line.rfind("  -", 0) != 0) continue;
+    const std::string first = line.substr(2, line.find(' ', 2) - 2);  // "-h,--help", "--no-simd-stages{false}"
+    for (const std::string& name : long_options(first)) names.insert(name);
+  }
+  names.erase("--help");
+  return names;
+}
+
+// the options of `idmpc <command> ...` in the README's synopsis (the sh block of "## Command line")
+std::set<std::string> readme_options(const std::string& command) {
+  const std::string readme = slurp(IDMPC_SOURCE_DIR "/README.md");
+  const std::size_t section = readme.find("\n## Command line");
+  const std::size_t block = readme.find("```sh\n", section);
+  const std::size_t block_end = readme.find("```", block + 6);
+  if (section == std::string::npos || block == std::string::npos || block_end == std::string::npos) return {};
+  std::string synopsis;
+  bool in_command = false;
+  for (const std::string& line : lines_of(readme.substr(block + 6, block_end - block - 6))) {
+    if (line.rfind("idmpc ", 0) == 0) in_command = line.rfind("idmpc " + command + " ", 0) == 0 || line == "idmpc " + command;
+    if (in_command) synopsis += line + "\n";
+  }
+  return long_options(synopsis);
+}
+
+std::string joined(const std::set<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
+  return text;
+}
+
+TEST_P(CliSynopsis, ListsTheOptionsOfTheHelp) {
+  const std::string& command = GetParam();
+  const Result r = idmpc(command + " --help");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::set<std::string> help = help_options(r.out);
+  const std::set<std::string> readme = readme_options(command);
+  ASSERT_FALSE(help.empty()) << r.out;
+  std::set<std::string> missing, extra;
+  std::set_difference(help.begin(), help.end(), readme.begin(), readme.end(), std::inserter(missing, missing.end()));
+  std::set_difference(readme.begin(), readme.end(), help.begin(), help.end(), std::inserter(extra, extra.end()));
+  EXPECT_TRUE(missing.empty()) << "README synopsis of 'idmpc " << command << "' lacks: " << joined(missing);
+  EXPECT_TRUE(extra.empty()) << "README synopsis of 'idmpc " << command << "' has options --help does not: " << joined(extra);
+}
+
+INSTANTIATE_TEST_SUITE_P(Commands, CliSynopsis, ::testing::Values("check", "dynamics", "swingup", "sweep", "render"));
+
 TEST_F(Cli, NegativeNumbersParseInEveryForm) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --q0 .4 -.4 -1e-3 -.5 --qref -.25 0 0 0 --duration 0.002 --log log.csv");
   ASSERT_EQ(r.code, 0) << r.err;
@@ -851,6 +929,81 @@ TEST_F(Cli, DynamicsSaysWhyAWriteFailedAndKeepsTheOldFile) {
   expect_no_temporaries();
 }
 
+// outputs that are inputs, or each other, are refused before anything runs (the default 10 s
+// run would print its summary if it started)
+class CliSwingupOutputs : public Cli, public ::testing::WithParamInterface<std::pair<std::string, std::vector<std::string>>> {};
+
+TEST_P(CliSwingupOutputs, ThatAreInputsOrEachOtherAreRefusedBeforeTheRun) {
+  const auto& [options, needles] = GetParam();
+  fs::copy_file(kArm4, dir_ / "model.xml");
+  write("task.json", R"({"model": "model.xml", "duration": 0.05})");
+  write("run.csv", "old log\n");
+  fs::create_symlink("run.csv", dir_ / "alias.csv");
+  const Result r = idmpc("swingup " + options);
+  SCOPED_TRACE("idmpc swingup " + options);
+  expect_error(r, needles);
+  EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(slurp(dir_ / "model.xml"), slurp(kArm4));
+  EXPECT_EQ(slurp(dir_ / "task.json"), R"({"model": "model.xml", "duration": 0.05})");
+  EXPECT_EQ(slurp(dir_ / "run.csv"), "old log\n");
+  EXPECT_FALSE(fs::exists(dir_ / "other.json"));
+  expect_no_temporaries();
+}
+
+std::string output_case_name(const ::testing::TestParamInfo<std::pair<std::string, std::vector<std::string>>>& info) {
+  static const std::vector<std::string> names = {"log_is_summary",   "linked_log_is_summary", "log_is_video",
+                                                 "summary_is_model", "log_is_task_file",      "video_is_the_tasks_model"};
+  return names.at(info.index);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Paths, CliSwingupOutputs,
+    ::testing::Values(
+        std::make_pair("model.xml --log run.csv --summary run.csv", std::vector<std::string>{"--summary 'run.csv'", "--log 'run.csv'"}),
+        std::make_pair("model.xml --log alias.csv --summary run.csv", std::vector<std::string>{"--summary 'run.csv'", "--log 'alias.csv'"}),
+        std::make_pair("model.xml --log run.csv --video run.csv", std::vector<std::string>{"--video 'run.csv'", "--log 'run.csv'"}),
+        std::make_pair("model.xml --log other.csv --summary model.xml", std::vector<std::string>{"--summary 'model.xml'", "model 'model.xml'"}),
+        std::make_pair("--task task.json --summary other.json --log task.json", std::vector<std::string>{"--log 'task.json'", "--task 'task.json'"}),
+        std::make_pair("--task task.json --log run.csv --summary other.json --video model.xml", std::vector<std::string>{"--video 'model.xml'", "model.xml"})),
+    output_case_name);
+
+TEST_F(Cli, SwingupRefusesADirectoryLogBeforeRunning) {
+  fs::create_directory(dir_ / "logs");
+  const Result r = idmpc("swingup " + quote(kArm4) + " --log logs --summary summary.json");
+  expect_error(r, {"--log 'logs'", "directory"});
+  EXPECT_EQ(r.out, "");
+  EXPECT_TRUE(fs::is_directory(dir_ / "logs"));
+  EXPECT_FALSE(fs::exists(dir_ / "summary.json"));
+  expect_no_temporaries();
+}
+
+TEST_F(Cli, SwingupRefusesAVideoWithoutFfmpegBeforeRunning) {
+  // no ffmpeg on PATH (the binary itself is run by its full path)
+  const Result r = idmpc("swingup " + quote(kArm4) + " --log log.csv --video run.mp4", "PATH=/nonexistent;");
+  expect_error(r, {"--video 'run.mp4'", "ffmpeg"});
+  EXPECT_EQ(r.out, "");
+  EXPECT_FALSE(fs::exists(dir_ / "log.csv"));
+  EXPECT_FALSE(fs::exists(dir_ / "run.mp4"));
+  expect_no_temporaries();
+}
+
+TEST_F(CliDevice, SwingupWritesThroughDevicesFollowsLinksAndKeepsModes) {
+  const fs::path null = device("null", 3);
+  if (null.empty()) GTEST_SKIP() << "cannot create a device node here (needs root and a dev-capable filesystem)";
+  fs::create_directory(dir_ / "real");
+  std::ofstream(dir_ / "real" / "log.csv") << "old\n";
+  fs::permissions(dir_ / "real" / "log.csv", fs::perms::owner_read | fs::perms::owner_write);
+  fs::create_symlink("real/log.csv", dir_ / "log.csv");
+  const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.02 --log log.csv --summary null");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_TRUE(is_char_device(null)) << "the device was replaced by a regular file";
+  EXPECT_TRUE(fs::is_symlink(dir_ / "log.csv")) << "the link was replaced by a regular file";
+  EXPECT_EQ(slurp(dir_ / "real" / "log.csv").rfind("t,q0,", 0), 0u);
+  EXPECT_EQ(fs::status(dir_ / "real" / "log.csv").permissions(), fs::perms::owner_read | fs::perms::owner_write);
+  expect_no_temporaries();
+}
+
 // a dynamics run blocked on a FIFO input, then interrupted: its temporary output goes too
 class CliInterrupted : public Cli, public ::testing::WithParamInterface<int> {};
 
@@ -948,7 +1101,7 @@ TEST_F(Cli, DynamicsNamesTheSeparatorOfASemicolonFile) {
 
 TEST_F(Cli, DynamicsEndsAnEndlessLineWithAnError) {
   // without a bound, reading /dev/zero grows one line until memory runs out (capped here)
-  const Result r = idmpc("dynamics " + quote(kArm4) + " --in /dev/zero --out out.csv", "ulimit -v 2000000;");
+  const Result r = idmpc("dynamics " + quote(kArm4) + " --in /dev/zero --out out.csv", kMemoryCap);
   expect_error(r, {"'/dev/zero' line 1", "longer than 1048576 bytes"});
   EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
   expect_no_temporaries();
@@ -1091,7 +1244,7 @@ TEST_F(Cli, CheckRefusesAHugeTextureBeforeLoadingIt) {
   // MuJoCo 2.2 would need ~5 GB for it (or crash inside mj_loadXML); memory capped here
   write("model.xml", hinge_slide_mjcf("", R"(axis="0 1 0")", "",
                                       R"(<asset><texture name="sky" type="skybox" builtin="gradient" width="40000" height="40000"/></asset>)"));
-  const Result r = idmpc("check model.xml", "ulimit -v 3000000;");
+  const Result r = idmpc("check model.xml", kMemoryCap);
   expect_error(r, {"'sky'", "40000x40000", "8192x8192"});
 }
 

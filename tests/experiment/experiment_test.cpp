@@ -141,12 +141,16 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
   s.saturated_steps = {3, 0, 1, 0};
   s.saturated_any = 4;
   s.max_constraint_violation = 0.25;
+  s.model_hash = "fnv1a64:0123456789abcdef";
+  s.log_hash = "fnv1a64:fedcba9876543210";
   const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");
   EXPECT_EQ(to_json(back).dump(), to_json(s).dump());
   EXPECT_EQ(back.label(), "C/GMRES (FD, adjoint) N=25 kmax=10");
   EXPECT_TRUE(std::isnan(back.p50_update_ms));
   EXPECT_EQ(back.torque_upper, s.torque_upper);  // unbounded joints survive as null
   EXPECT_EQ(back.max_constraint_violation, 0.25);
+  EXPECT_EQ(back.model_hash, s.model_hash);
+  EXPECT_EQ(back.log_hash, s.log_hash);
   s.max_constraint_violation = std::nan("");  // non-finite OCP torques stay visible
   EXPECT_TRUE(std::isnan(summary_from_json(to_json(s), "x.json").max_constraint_violation));
 
@@ -186,6 +190,100 @@ TEST(RunRecord, LogWrittenIsLogRead) {
     EXPECT_TRUE(std::isnan(log.residual[1]));
     EXPECT_DOUBLE_EQ(log.update_ms[1], 0.3);
     EXPECT_EQ(log.label, "run");
+  }
+}
+
+TEST(RunRecord, SummariesWithoutHashesAreStillRead) {
+  RunSummary s;
+  s.task = paper_task();
+  s.n = 4;
+  nlohmann::json old = to_json(s);
+  EXPECT_FALSE(old.contains("model_hash"));  // not written when unknown
+  EXPECT_FALSE(old.contains("log_hash"));
+  const RunSummary back = summary_from_json(old, "old.json");
+  EXPECT_EQ(back.model_hash, "");
+  EXPECT_EQ(back.log_hash, "");
+}
+
+TEST(RunRecord, FileHashIsFnv1aOfTheBytes) {
+  TempDir dir;
+  // FNV-1a 64 test vectors
+  EXPECT_EQ(file_hash(dir.write("empty", "")), "fnv1a64:cbf29ce484222325");
+  EXPECT_EQ(file_hash(dir.write("a", "a")), "fnv1a64:af63dc4c8601ec8c");
+  const std::string big(200000, 'x');
+  EXPECT_EQ(file_hash(dir.write("big1", big)), file_hash(dir.write("big2", big)));
+  EXPECT_NE(file_hash(dir.write("big1", big)), file_hash(dir.write("big3", big + "y")));
+  EXPECT_EQ(file_hash(""), "");
+  EXPECT_EQ(file_hash(fs::temp_directory_path().string()), "");  // a directory
+  EXPECT_EQ(file_hash("/dev/null"), "");                          // a device is never read
+}
+
+// a 4-joint log of `rows` rows and, beside it, a summary of `n` joints and `steps` steps
+class SiblingSummary : public ::testing::Test {
+ protected:
+  std::string log(int rows) {
+    std::ostringstream text;
+    {
+      RunLogWriter w(text, 4, false);
+      const VecX<double> q = VecX<double>::Zero(4), v = q, u = q, uc = q;
+      for (int k = 0; k < rows; ++k) w.row(1e-3 * k, q, v, u, uc, 0.1, 0.2);
+    }
+    return dir_.write("run.csv", text.str());
+  }
+  void summary(int n, int steps, const std::string& log_hash = "") {
+    RunSummary s;
+    s.task = paper_task();
+    s.task.formulation = "fd";
+    s.task.derivatives = "matrix";
+    s.n = n;
+    s.steps = steps;
+    s.model_hash = "fnv1a64:0000000000000001";
+    s.log_hash = log_hash;
+    dir_.write("run.json", to_json(s).dump());
+  }
+  TempDir dir_;
+};
+
+TEST_F(SiblingSummary, OfThisRunLabelsTheLogAndNamesItsModel) {
+  const std::string csv = log(5);
+  summary(4, 5, file_hash(csv));
+  const RunLog l = read_run_log(csv);
+  EXPECT_EQ(l.label, "C/GMRES (FD, matrix) N=25 kmax=10");
+  EXPECT_EQ(l.formulation, "fd");
+  EXPECT_EQ(l.model_hash, "fnv1a64:0000000000000001");
+  EXPECT_EQ(l.summary_model, paper_task().model);
+  EXPECT_EQ(fs::path(l.summary_path).filename(), "run.json");
+  EXPECT_EQ(l.summary_warning, "");
+}
+
+TEST_F(SiblingSummary, OfAnotherRunIsNotUsed) {
+  const std::string csv = log(5);
+  struct Case {
+    int n, steps;
+    std::string log_hash, needle;
+  };
+  for (const Case& c : {Case{3, 5, "", "3 joints"}, Case{4, 7, "", "7 control steps"},
+                        Case{4, 5, "fnv1a64:0000000000000002", "fnv1a64:0000000000000002"}}) {
+    summary(c.n, c.steps, c.log_hash);
+    const RunLog l = read_run_log(csv);
+    EXPECT_EQ(l.label, "run") << c.needle;
+    EXPECT_EQ(l.formulation, "");
+    EXPECT_EQ(l.model_hash, "");
+    EXPECT_NE(l.summary_warning.find("run.json"), std::string::npos) << l.summary_warning;
+    EXPECT_NE(l.summary_warning.find(c.needle), std::string::npos) << l.summary_warning;
+  }
+}
+
+TEST_F(SiblingSummary, ThatIsBrokenDoesNotBlockTheLog) {
+  const std::string csv = log(5);
+  for (const std::string text : {"{", "{\"schema\": 1}", "[]", "{\"schema\": 7}"}) {
+    dir_.write("run.json", text);
+    RunLog l;
+    EXPECT_NO_THROW(l = read_run_log(csv)) << text;
+    EXPECT_EQ(l.rows(), 5u);
+    EXPECT_EQ(l.label, "run");
+    EXPECT_NE(l.summary_warning.find("run.json"), std::string::npos) << l.summary_warning;
+    EXPECT_NE(l.summary_warning.find("file name"), std::string::npos) << l.summary_warning;
   }
 }
 

@@ -4,11 +4,15 @@
 
 #include <fcntl.h>
 #include <poll.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -19,6 +23,7 @@
 #include <iterator>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -277,8 +282,14 @@ class RenderTest : public ::testing::Test {
 // ------------------------------------------------------------------------------- run logs
 
 // a run summary as `idmpc swingup --summary` writes it
-std::string summary_json(const char* formulation, const char* derivatives, int N, int kmax) {
+std::string summary_json(const char* formulation, const char* derivatives, int N, int kmax,
+                         const std::string& csv) {
+  // the summary of the run that wrote `csv`: its joints and steps (one row per step)
+  std::ifstream in(csv);
+  int lines = 0;
+  for (std::string line; std::getline(in, line);) ++lines;
   RunSummary s;
+  s.steps = lines - 1;
   s.task = paper_task();
   s.task.formulation = formulation;
   s.task.derivatives = derivatives;
@@ -301,7 +312,7 @@ TEST_F(RenderTest, ReadsLogAndLabelFromSummary) {
   EXPECT_EQ(plain.nearest_row(-1.0), 0u);
   EXPECT_EQ(plain.nearest_row(9.0), 100u);
 
-  std::ofstream(dir_.file("run.json")) << summary_json("id", "adjoint", 25, 10);
+  std::ofstream(dir_.file("run.json")) << summary_json("id", "adjoint", 25, 10, csv);
   const RunLog labelled = read_run_log(csv);
   EXPECT_EQ(labelled.label, "C/GMRES (ID, adjoint) N=25 kmax=10");
   EXPECT_EQ(labelled.formulation, "id");
@@ -343,6 +354,33 @@ TEST_F(RenderTest, LogWithWrongJointCountIsRejected) {
   EXPECT_NE(msg.find("arm4.xml"), std::string::npos) << msg;
   EXPECT_NE(msg.find("3 joints"), std::string::npos) << msg;
   EXPECT_FALSE(fs::exists(out));
+}
+
+// a log whose summary says it ran on another model is refused, naming both models; one of the
+// same model (the same bytes under another name) is rendered
+TEST_F(RenderTest, LogOfAnotherModelIsRefused) {
+  const std::string csv = dir_.file("run.csv");
+  write_log(csv, 4, 0.1);
+  const std::string other = dir_.file("other_arm.xml");
+  {
+    std::ifstream in(kModel);
+    std::ofstream(other) << in.rdbuf() << "<!-- another model -->\n";
+  }
+  RunSummary s = summary_from_json(nlohmann::json::parse(summary_json("id", "adjoint", 25, 10, csv)), "run.json");
+  s.task.model = other;
+  s.model_hash = file_hash(other);
+  std::ofstream(dir_.file("run.json")) << to_json(s).dump();
+  const std::string out = dir_.file("never.mp4");
+  const std::string msg = message_of<std::invalid_argument>(
+      [&] { render_video(kModel, {read_run_log(csv)}, small_options(), out); });
+  EXPECT_NE(msg.find("run.csv"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("other_arm.xml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("arm4.xml"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(out));
+
+  s.model_hash = file_hash(kModel);  // the same model, copied elsewhere
+  std::ofstream(dir_.file("run.json")) << to_json(s).dump();
+  EXPECT_NO_THROW(check_run_log(read_run_log(csv), mj::load_model(kModel).get(), kModel));
 }
 
 // ------------------------------------------------------------------------------- errors
@@ -455,6 +493,87 @@ TEST_F(RenderTest, AbandonedWriterLeavesNoFile) {
   }
 }
 
+// writes a few grey frames and finishes
+void write_grey_video(const std::string& out) {
+  VideoWriter writer(out, kWidth, kHeight, kFps);
+  std::vector<unsigned char> grey(static_cast<std::size_t>(kWidth * kHeight * 3), 128);
+  for (int i = 0; i < 3; ++i) writer.write_frame(grey.data());
+  writer.finish();
+}
+
+bool is_mp4(const std::string& bytes) { return bytes.size() > 8 && bytes.compare(4, 4, "ftyp") == 0; }
+
+std::string slurp_bytes(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST_F(RenderTest, WriterWritesThroughAFifo) {
+  const fs::path fifo = dir_.path() / "out.fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  // the reader holds the FIFO open (a writer does not block), reads until the writer is done
+  // and has closed it; a writer that replaced the FIFO instead never sends anything (no hang)
+  const int fd = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+  ASSERT_GE(fd, 0);
+  std::atomic<bool> done{false};
+  std::string error;
+  std::thread writer([&] {
+    try {
+      write_grey_video(fifo.string());
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    done = true;
+  });
+  std::string received;
+  char buffer[1 << 16];
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (std::chrono::steady_clock::now() < deadline) {
+    pollfd p{fd, POLLIN, 0};
+    ::poll(&p, 1, 50);
+    const ssize_t n = ::read(fd, buffer, sizeof(buffer));
+    if (n > 0) received.append(buffer, static_cast<std::size_t>(n));
+    else if (done && n == 0) break;
+  }
+  writer.join();
+  ::close(fd);
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(fs::status(fifo).type(), fs::file_type::fifo) << "the FIFO was replaced";
+  EXPECT_TRUE(is_mp4(received)) << received.size() << " bytes";
+  for (const auto& entry : fs::directory_iterator(dir_.path())) {
+    EXPECT_EQ(entry.path().filename(), "out.fifo") << "left behind: " << entry.path();
+  }
+}
+
+TEST_F(RenderTest, WriterWritesThroughACharacterDevice) {
+  // a null device node in the test directory
+  const fs::path null = dir_.path() / "null";
+  if (::mknod(null.c_str(), S_IFCHR | 0666, makedev(1, 3)) != 0) GTEST_SKIP() << "cannot create a device node";
+  const int fd = ::open(null.c_str(), O_WRONLY);
+  if (fd < 0) GTEST_SKIP() << "device nodes do not work here (nodev)";
+  ::close(fd);
+  write_grey_video(null.string());
+  EXPECT_EQ(fs::status(null).type(), fs::file_type::character) << "the device was replaced by a regular file";
+  for (const auto& entry : fs::directory_iterator(dir_.path())) {
+    EXPECT_EQ(entry.path().filename(), "null") << "left behind: " << entry.path();
+  }
+}
+
+TEST_F(RenderTest, WriterFollowsALinkAndKeepsThePermissions) {
+  fs::create_directory(dir_.path() / "real");
+  const fs::path target = dir_.path() / "real" / "video.mp4";
+  std::ofstream(target) << "old";
+  fs::permissions(target, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  fs::create_symlink("real/video.mp4", dir_.path() / "link.mp4");
+  write_grey_video(dir_.file("link.mp4"));
+  EXPECT_TRUE(fs::is_symlink(dir_.path() / "link.mp4")) << "the link was replaced by a regular file";
+  EXPECT_TRUE(is_mp4(slurp_bytes(target)));
+  EXPECT_EQ(fs::status(target).permissions(), fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+  for (const auto& entry : fs::directory_iterator(dir_.path() / "real")) {
+    EXPECT_EQ(entry.path().filename(), "video.mp4") << "left behind: " << entry.path();
+  }
+}
+
 // ------------------------------------------------------------------------------- videos
 
 TEST_F(RenderTest, GlContextRejectsBadSize) {
@@ -503,8 +622,8 @@ TEST_F(RenderTest, CompareVideoShowsBothRunsInTheirColours) {
   const std::string b = dir_.file("id.csv");
   write_log(a, 4, 0.5);
   write_log(b, 4, 0.5, 0.15);
-  std::ofstream(dir_.file("fd.json")) << summary_json("fd", "matrix", 10, 5);
-  std::ofstream(dir_.file("id.json")) << summary_json("id", "matrix", 10, 5);
+  std::ofstream(dir_.file("fd.json")) << summary_json("fd", "matrix", 10, 5, a);
+  std::ofstream(dir_.file("id.json")) << summary_json("id", "matrix", 10, 5, b);
   const std::string out = dir_.file("compare.mp4");
   // ID given first: the colours still follow the formulation (FD blue, ID orange); no overlay,
   // whose legend has the same colours
@@ -680,7 +799,7 @@ TEST_F(RenderTest, OverlayDoesNotCoverTheArm) {
   const std::string csv = dir_.file("lean.csv");
   write_pose_log(csv, {-kPi / 4, 0, 0, 0}, 0.1);
   // a real run's label makes the table wide enough to reach the arm's tip
-  std::ofstream(dir_.file("lean.json")) << summary_json("id", "adjoint", 25, 10);
+  std::ofstream(dir_.file("lean.json")) << summary_json("id", "adjoint", 25, 10, csv);
   const RunLog log = read_run_log(csv);
   VideoOptions options;
   options.camera = "fixed:side";
@@ -826,6 +945,51 @@ TEST_F(RenderTest, CommandLineRendersAndReportsErrors) {
       run(idmpc + " --log '" + dir_.file("nope.csv") + "' --out '" + out + "' 2>&1");
   EXPECT_EQ(missing.status, 1);
   EXPECT_NE(missing.out.find("nope.csv"), std::string::npos) << missing.out;
+}
+
+// a stale or broken summary beside the log: a warning, and the log is rendered under its name
+TEST_F(RenderTest, CommandLineWarnsAboutAStaleSummaryAndRendersTheLog) {
+  const std::string csv = dir_.file("cli.csv");
+  write_log(csv, 4, 0.1);
+  const std::string idmpc = std::string("'") + IDMPC_BINARY + "' render '" + kModel + "' --log '" + csv +
+                            "' --out '" + dir_.file("cli.mp4") + "' --width 320 --height 240 2>&1 >/dev/null";
+  std::ofstream(dir_.file("cli.json")) << summary_json("fd", "matrix", 50, 3, dir_.file("absent.csv"));
+  const CommandResult stale = run(idmpc);
+  EXPECT_EQ(stale.status, 0) << stale.out;
+  EXPECT_NE(stale.out.find("idmpc: warning: run summary '" + dir_.file("cli.json") + "'"), std::string::npos) << stale.out;
+  EXPECT_NE(stale.out.find("file name"), std::string::npos) << stale.out;
+  EXPECT_TRUE(fs::exists(dir_.file("cli.mp4")));
+  fs::remove(dir_.file("cli.mp4"));
+
+  std::ofstream(dir_.file("cli.json")) << "{ broken";
+  const CommandResult broken = run(idmpc);
+  EXPECT_EQ(broken.status, 0) << broken.out;
+  EXPECT_NE(broken.out.find("idmpc: warning:"), std::string::npos) << broken.out;
+  EXPECT_NE(broken.out.find("cli.json"), std::string::npos) << broken.out;
+  EXPECT_TRUE(fs::exists(dir_.file("cli.mp4")));
+}
+
+TEST_F(RenderTest, CommandLineRefusesAnOutputThatIsAnInput) {
+  const std::string csv = dir_.file("cli.csv");
+  write_log(csv, 4, 0.1);
+  const std::string other = dir_.file("other.csv");
+  write_log(other, 4, 0.1, 0.05);
+  fs::copy_file(kModel, dir_.file("model.xml"));
+  const std::string log_bytes = slurp_bytes(csv);
+  const std::string idmpc = "cd '" + dir_.path().string() + "' && '" + std::string(IDMPC_BINARY) + "' render model.xml";
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {" --log cli.csv --out cli.csv", {"--out 'cli.csv'", "--log 'cli.csv'"}},
+      {" --log cli.csv --out model.xml", {"--out 'model.xml'", "model 'model.xml'"}},
+      {" --compare other.csv cli.csv --out cli.csv", {"--out 'cli.csv'", "--compare 'cli.csv'"}}};
+  for (const auto& [args, needles] : cases) {
+    const CommandResult r = run(idmpc + args + " --width 320 --height 240 2>&1");
+    EXPECT_EQ(r.status, 1) << args;
+    EXPECT_EQ(r.out.rfind("idmpc: error:", 0), 0u) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
+    for (const std::string& needle : needles) EXPECT_NE(r.out.find(needle), std::string::npos) << r.out;
+  }
+  EXPECT_EQ(slurp_bytes(csv), log_bytes);
+  EXPECT_EQ(slurp_bytes(dir_.file("model.xml")), slurp_bytes(kModel));
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -77,14 +78,38 @@ bool parse_number(const std::string& text, double& value) {
   return end == begin + text.size();
 }
 
-// fills formulation, derivatives and label from `<log>.json` when it exists
+// fills label, formulation, derivatives and the model from `<log>.json` when it exists and
+// belongs to this log; otherwise says in summary_warning why it was not used
 void read_sibling_summary(RunLog& log) {
   namespace fs = std::filesystem;
   const fs::path json_path = fs::path(log.path).replace_extension(".json");
   log.label = fs::path(log.path).stem().string();
   std::error_code ec;
   if (!fs::is_regular_file(json_path, ec)) return;
-  const RunSummary s = read_summary(json_path.string());
+  const std::string fallback = ": not used, run log '" + log.path + "' is labelled by its file name";
+  RunSummary s;
+  try {
+    s = read_summary(json_path.string());
+  } catch (const std::exception& e) {
+    log.summary_warning = e.what() + fallback;
+    return;
+  }
+  const auto rows = static_cast<long>(log.rows());
+  std::string other;  // how the summary shows that it belongs to another run
+  if (s.n != log.n) {
+    other = "is for " + std::to_string(s.n) + " joints, the log has " + std::to_string(log.n);
+  } else if (s.steps != rows) {
+    other = "is for " + std::to_string(s.steps) + " control steps, the log has " + std::to_string(rows) + " rows";
+  } else if (!s.log_hash.empty() && s.log_hash != file_hash(log.path)) {
+    other = "is for a log with hash " + s.log_hash + ", this log's is " + file_hash(log.path);
+  }
+  if (!other.empty()) {
+    log.summary_warning = "run summary '" + json_path.string() + "' " + other + " (a stale summary?)" + fallback;
+    return;
+  }
+  log.summary_path = json_path.string();
+  log.summary_model = s.task.model;
+  log.model_hash = s.model_hash;
   log.formulation = s.task.formulation;
   log.derivatives = s.task.derivatives;
   log.label = s.label();
@@ -220,6 +245,28 @@ std::string RunSummary::label() const {
          " kmax=" + std::to_string(task.kmax);
 }
 
+std::string file_hash(const std::string& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (path.empty() || !fs::is_regular_file(path, ec)) return "";
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read '" + path + "' to hash it");
+  std::uint64_t h = 14695981039346656037ull;  // FNV-1a offset basis
+  std::vector<char> buffer(1 << 16);
+  while (in) {
+    in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    const auto got = static_cast<std::size_t>(in.gcount());
+    for (std::size_t i = 0; i < got; ++i) {
+      h ^= static_cast<unsigned char>(buffer[i]);
+      h *= 1099511628211ull;  // FNV prime
+    }
+  }
+  if (in.bad()) throw std::runtime_error("cannot read '" + path + "' to hash it");
+  std::ostringstream hex;
+  hex << "fnv1a64:" << std::hex << std::setw(16) << std::setfill('0') << h;
+  return hex.str();
+}
+
 nlohmann::json to_json(const RunSummary& s) {
   nlohmann::json j;
   j["schema"] = s.schema;
@@ -257,6 +304,8 @@ nlohmann::json to_json(const RunSummary& s) {
   j["max_constraint_violation"] = std::isfinite(s.max_constraint_violation)
                                       ? nlohmann::json(s.max_constraint_violation)
                                       : nlohmann::json(nullptr);  // NaN: the OCP's torques were not finite
+  if (!s.model_hash.empty()) j["model_hash"] = s.model_hash;
+  if (!s.log_hash.empty()) j["log_hash"] = s.log_hash;
   return j;
 }
 
@@ -313,6 +362,8 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.saturated_any = j.at("saturated_any").get<long>();
     // absent in summaries written before it existed; null when the torques were not finite
     if (j.contains("max_constraint_violation")) s.max_constraint_violation = number("max_constraint_violation");
+    if (j.contains("model_hash")) s.model_hash = j.at("model_hash").get<std::string>();
+    if (j.contains("log_hash")) s.log_hash = j.at("log_hash").get<std::string>();
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(where + ": missing or mistyped field (" + e.what() + ")");
   }

@@ -59,10 +59,18 @@ struct RunSummary {
   double max_constraint_violation = 0;
   std::vector<std::string> unmodeled;
   std::vector<std::string> warnings;  ///< said at the start: unmodeled features, ranges, timestep
+  /// @brief file_hash() of the model file as run, and of the log as written ("" in summaries
+  /// written before these fields existed, and for a log that is no regular file)
+  std::string model_hash, log_hash;
 
   /// @brief "C/GMRES (ID, adjoint) N=25 kmax=10"
   std::string label() const;
 };
+
+/// @brief A stable hash of a regular file's bytes: "fnv1a64:" and 16 hex digits (FNV-1a, 64 bit);
+/// "" for an empty path or a path that is no regular file (a device, a FIFO).
+/// @throws std::runtime_error naming the file if it cannot be read
+std::string file_hash(const std::string& path);
 
 nlohmann::json to_json(const RunSummary& s);
 /// @brief Throws std::runtime_error naming `source` for a summary of another schema version or
@@ -89,6 +97,11 @@ struct RunLog {
   std::vector<double> u_commanded;  ///< rows x nu, row-major, if the log has uc* columns
   std::vector<double> residual;   ///< rows
   std::vector<double> update_ms;  ///< rows
+  /// @brief From the sibling summary when it was used: its path, the model it names (as run)
+  /// and that model file's hash ("" if the summary has none); all "" otherwise
+  std::string summary_path, summary_model, model_hash;
+  /// @brief Why a sibling summary was not used (unreadable, or of another run), or ""
+  std::string summary_warning;
 
   std::size_t rows() const { return t.size(); }
   const double* q_row(std::size_t i) const { return q.data() + i * static_cast<std::size_t>(n); }
@@ -103,10 +116,11 @@ struct RunLog {
 };
 
 /// @brief Reads a run log CSV and, when `<same path>.json` exists beside it, its summary for
-/// the label. Throws std::runtime_error naming
-/// the file (and the line number) for a missing or unreadable file, a bad header, a row with
-/// the wrong number of columns, a non-numeric value, non-increasing times, no rows at all, or a
-/// malformed JSON summary.
+/// the label and the model. A sibling summary that cannot be read, or that belongs to another
+/// run (another joint count or number of steps, or a log hash that is not this log's), is not
+/// used: the label is the file's stem and summary_warning says why. Throws std::runtime_error
+/// naming the file (and the line number) for a missing or unreadable file, a bad header, a row
+/// with the wrong number of columns, a non-numeric value, non-increasing times or no rows.
 RunLog read_run_log(const std::string& csv_path);
 
 }  // namespace idmpc

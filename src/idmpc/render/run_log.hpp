@@ -13,8 +13,10 @@ namespace idmpc::render {
 using idmpc::read_run_log;
 using idmpc::RunLog;
 
-/// @brief Checks that a log fits a model: its joint count equals the model's nq. Throws
-/// std::invalid_argument ("log 'x.csv' has 3 joints but model 'arm4.xml' has 4") otherwise.
+/// @brief Checks that a log fits a model: its joint count equals the model's nq, and when the
+/// log's summary records the hash of the model file it ran on, `model_path` has that hash.
+/// Throws std::invalid_argument ("log 'x.csv' has 3 joints but model 'arm4.xml' has 4", or
+/// naming both models) otherwise.
 void check_run_log(const RunLog& log, const mjModel* m, const std::string& model_path);
 
 }  // namespace idmpc::render

@@ -87,6 +87,25 @@ bool write_all(int fd, const unsigned char* data, std::size_t size) {
   return ok;
 }
 
+// the file a write to `path` lands in: symbolic links of its last component followed (also a
+// dangling one, whose target is then created); `path` itself if it is no link
+std::string follow_links(const std::string& path) {
+  namespace fs = std::filesystem;
+  fs::path p(path);
+  for (int hops = 0; hops < 40; ++hops) {
+    struct stat st {};
+    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
+    std::error_code ec;
+    const fs::path link = fs::read_symlink(p, ec);
+    if (ec) return p.string();
+    p = link.is_absolute() ? link : p.parent_path() / link;
+  }
+  throw std::runtime_error("cannot write '" + path + "': " + errno_text(ELOOP));
+}
+
+// a device, FIFO or socket: written through, never replaced
+bool is_special(const struct stat& st) { return !S_ISREG(st.st_mode) && !S_ISDIR(st.st_mode); }
+
 std::string format_fps(double fps) {
   char text[64];
   std::snprintf(text, sizeof(text), "%.9g", fps);
@@ -116,9 +135,15 @@ std::string find_on_path(const std::string& name) {
 void check_output_writable(const std::string& path) {
   namespace fs = std::filesystem;
   if (path.empty()) throw std::invalid_argument("output path: expected a file name, got ''");
-  const fs::path out(path);
-  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
   const std::string head = "cannot write '" + path + "': ";
+  const std::string target = follow_links(path);
+  struct stat st {};
+  if (::stat(target.c_str(), &st) == 0 && is_special(st)) {
+    if (::access(target.c_str(), W_OK) != 0) throw std::runtime_error(head + errno_text(errno));
+    return;
+  }
+  const fs::path out(target);
+  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
   std::error_code ec;
   if (!fs::exists(dir, ec)) {
     throw std::runtime_error(head + "directory '" + dir.string() + "' does not exist");
@@ -162,9 +187,25 @@ VideoWriter::VideoWriter(const std::string& out_mp4, int width, int height, doub
   }
   check_output_writable(out_mp4);
 
-  // temporary video next to the output, so the final rename stays on one file system
-  const fs::path out(out_mp4);
-  const fs::path dir = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  // a link is followed (the link stays), a special file written through, an existing file's
+  // permissions kept
+  target_path_ = follow_links(out_mp4);
+  struct stat st {};
+  if (::stat(target_path_.c_str(), &st) == 0) {
+    if (is_special(st)) {
+      direct_ = true;
+    } else {
+      existing_mode_ = static_cast<int>(st.st_mode & 07777);
+      existing_uid_ = st.st_uid;
+      existing_gid_ = st.st_gid;
+    }
+  }
+
+  // temporary video next to the output, so the final rename stays on one file system (for a
+  // special file, in the temporary directory: its bytes are copied into it)
+  const fs::path out(target_path_);
+  const fs::path dir = direct_ ? fs::temp_directory_path()
+                               : (out.has_parent_path() ? out.parent_path() : fs::path("."));
   std::string tmp = (dir / ("." + out.filename().string() + ".tmp-XXXXXX.mp4")).string();
   std::vector<char> tmp_name(tmp.begin(), tmp.end());
   tmp_name.push_back('\0');
@@ -261,11 +302,26 @@ void VideoWriter::finish() {
                              "': expected exit status 0, got " + describe_status(status) +
                              (tail.empty() ? std::string() : "; ffmpeg said: " + tail));
   }
-  // mkstemps made the file 0600: give the video the permissions of a normally created file
-  const mode_t mask = ::umask(0);
-  ::umask(mask);
-  ::chmod(tmp_path_.c_str(), 0666 & ~mask);
-  if (std::rename(tmp_path_.c_str(), out_path_.c_str()) != 0) {
+  if (direct_) {
+    copy_into_target();
+    std::remove(tmp_path_.c_str());
+    std::remove(log_path_.c_str());
+    finished_ = true;
+    return;
+  }
+  // mkstemps made the file 0600: the video keeps the permissions (and, as root, the owner) of
+  // the file it replaces, or gets those of a normally created file
+  if (existing_mode_ >= 0) {
+    if (::geteuid() == 0 && ::chown(tmp_path_.c_str(), existing_uid_, existing_gid_) != 0) {
+      // best effort: a filesystem without owners keeps ours
+    }
+    ::chmod(tmp_path_.c_str(), static_cast<mode_t>(existing_mode_));
+  } else {
+    const mode_t mask = ::umask(0);
+    ::umask(mask);
+    ::chmod(tmp_path_.c_str(), 0666 & ~mask);
+  }
+  if (std::rename(tmp_path_.c_str(), target_path_.c_str()) != 0) {
     const int err = errno;
     abandon();
     throw std::runtime_error("cannot move the encoded video to '" + out_path_ +
@@ -273,6 +329,42 @@ void VideoWriter::finish() {
   }
   std::remove(log_path_.c_str());
   finished_ = true;
+}
+
+void VideoWriter::copy_into_target() {
+  auto fail = [this](int err) {
+    abandon();
+    throw std::runtime_error("cannot write video '" + out_path_ + "': " + errno_text(err));
+  };
+  const int in = ::open(tmp_path_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (in < 0) fail(errno);
+  int out = -1;
+  do {
+    out = ::open(target_path_.c_str(), O_WRONLY | O_CLOEXEC);
+  } while (out < 0 && errno == EINTR);
+  if (out < 0) {
+    const int err = errno;
+    ::close(in);
+    fail(err);
+  }
+  std::vector<unsigned char> buffer(1 << 16);
+  int err = 0;
+  for (;;) {
+    const ssize_t n = ::read(in, buffer.data(), buffer.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      err = errno;
+      break;
+    }
+    if (n == 0) break;
+    if (!write_all(out, buffer.data(), static_cast<std::size_t>(n))) {
+      err = errno;
+      break;
+    }
+  }
+  ::close(in);
+  if (::close(out) != 0 && !err && errno != EINTR) err = errno;
+  if (err) fail(err);
 }
 
 void VideoWriter::fail_with_ffmpeg_status(const std::string& what) {

@@ -11,14 +11,17 @@ namespace idmpc::render {
 std::string find_on_path(const std::string& name);
 
 /// @brief Checks that a file can be created at `path` (its directory exists, is a directory and
-/// is writable, and `path` itself is not a directory) without creating it; throws
-/// std::runtime_error naming the path and the reason otherwise.
+/// is writable, and `path` itself is not a directory) without creating it, or that `path` is a
+/// writable special file (a device or FIFO, which is written through); a symbolic link is
+/// followed. Throws std::runtime_error naming the path and the reason otherwise.
 void check_output_writable(const std::string& path);
 
 /// @brief Writes an MP4 (H.264, yuv420p) from raw RGB frames through `ffmpeg`.
 ///
 /// ffmpeg writes to a temporary file next to the output, which finish() renames onto the
-/// output once ffmpeg exits cleanly; abandoning the writer (destruction without finish(), for
+/// output once ffmpeg exits cleanly (a symbolic link is followed and stays a link; a replaced
+/// file keeps its permissions; a special file such as a character device or FIFO is never
+/// replaced: the finished video is copied into it); abandoning the writer (destruction without finish(), for
 /// example during an exception) stops ffmpeg and removes the temporary file, so a failed run
 /// never leaves a truncated video behind. ffmpeg's stderr goes to a temporary log whose tail
 /// is quoted when ffmpeg fails.
@@ -51,8 +54,14 @@ class VideoWriter {
   [[noreturn]] void fail_with_ffmpeg_status(const std::string& what);
   int wait_for_ffmpeg();
   void abandon() noexcept;
+  void copy_into_target();
 
-  std::string out_path_;
+  std::string out_path_;     // as given
+  std::string target_path_;  // links followed: the file replaced or written through
+  bool direct_ = false;      // target is a special file: written through, never replaced
+  int existing_mode_ = -1;   // permission bits of the file replaced, or -1
+  uid_t existing_uid_ = 0;
+  gid_t existing_gid_ = 0;
   std::string tmp_path_;
   std::string log_path_;
   int width_ = 0;
