@@ -992,5 +992,27 @@ TEST_F(RenderTest, CommandLineRefusesAnOutputThatIsAnInput) {
   EXPECT_EQ(slurp_bytes(dir_.file("model.xml")), slurp_bytes(kModel));
 }
 
+// ffmpeg exits 0 when its writes fail (a full disk; here a file size limit with SIGXFSZ
+// ignored, so writes fail with EFBIG as they would with ENOSPC): the command fails naming the
+// cause, the good video already there stays byte for byte, and no temporary is left behind
+TEST_F(RenderTest, CommandLineRefusesAVideoTruncatedByAFailedWrite) {
+  const std::string csv = dir_.file("cli.csv");
+  write_log(csv, 4, 1.0);
+  const std::string out = dir_.file("v.mp4");
+  const std::string idmpc = "cd '" + dir_.path().string() + "' && '" + std::string(IDMPC_BINARY) + "' render '" +
+                            std::string(kModel) + "' --log cli.csv --out v.mp4 --width 320 --height 240";
+  ASSERT_EQ(run(idmpc + " 2>/dev/null").status, 0);
+  const std::string good = slurp_bytes(out);
+  ASSERT_GT(good.size(), 8192u) << "the limit below must cut the video";
+  const CommandResult r = run("bash -c \"trap '' XFSZ; ulimit -f 8; " + idmpc + " 2>&1\"");
+  EXPECT_NE(r.status, 0) << r.out;
+  EXPECT_NE(r.out.find("idmpc: error: ffmpeg exited 0 but the video for 'v.mp4' is incomplete"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(slurp_bytes(out), good);
+  for (const auto& e : fs::directory_iterator(dir_.path())) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+  }
+}
+
 }  // namespace
 }  // namespace idmpc::render

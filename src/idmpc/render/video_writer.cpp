@@ -22,6 +22,43 @@ extern char** environ;
 namespace idmpc::render {
 namespace {
 
+// Why the MP4 at `path` is not a complete file, or "" if it is: its top-level boxes must tile
+// the file exactly and include the movie header (moov) and the media data (mdat). ffmpeg exits
+// 0 when its writes fail (a full disk, a file size limit) and leaves a truncated file.
+std::string mp4_incomplete(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return "cannot be read back";
+  in.seekg(0, std::ios::end);
+  const long long size = static_cast<long long>(in.tellg());
+  in.seekg(0);
+  bool moov = false, mdat = false;
+  long long at = 0;
+  while (at < size) {
+    unsigned char h[16];
+    if (size - at < 8 || !in.read(reinterpret_cast<char*>(h), 8)) return "a box header is cut off at byte " + std::to_string(at);
+    long long box = (static_cast<long long>(h[0]) << 24) | (h[1] << 16) | (h[2] << 8) | h[3];
+    const std::string type(reinterpret_cast<const char*>(h + 4), 4);
+    if (box == 1) {
+      if (!in.read(reinterpret_cast<char*>(h + 8), 8)) return "a box header is cut off at byte " + std::to_string(at);
+      box = 0;
+      for (int k = 8; k < 16; ++k) box = (box << 8) | h[k];
+    } else if (box == 0) {
+      box = size - at;  // to the end of the file
+    }
+    if (box < 8 || at + box > size) {
+      return "box '" + type + "' at byte " + std::to_string(at) + " needs " + std::to_string(box) + " bytes, " +
+             std::to_string(size - at) + " are there";
+    }
+    moov = moov || type == "moov";
+    mdat = mdat || type == "mdat";
+    at += box;
+    in.seekg(at);
+  }
+  if (!moov) return "it has no movie header (moov)";
+  if (!mdat) return "it has no media data (mdat)";
+  return "";
+}
+
 constexpr std::size_t kStderrTailChars = 1500;  // enough for ffmpeg's last few error lines
 
 std::string errno_text(int err) { return std::strerror(err); }
@@ -300,6 +337,13 @@ void VideoWriter::finish() {
     abandon();
     throw std::runtime_error("ffmpeg failed to encode '" + out_path_ +
                              "': expected exit status 0, got " + describe_status(status) +
+                             (tail.empty() ? std::string() : "; ffmpeg said: " + tail));
+  }
+  if (const std::string why = mp4_incomplete(tmp_path_); !why.empty()) {
+    const std::string tail = file_tail(log_path_);
+    abandon();
+    throw std::runtime_error("ffmpeg exited 0 but the video for '" + out_path_ + "' is incomplete (" + why +
+                             "; a full disk or a file size limit?); nothing was replaced" +
                              (tail.empty() ? std::string() : "; ffmpeg said: " + tail));
   }
   if (direct_) {
