@@ -7,6 +7,22 @@
 #include "idmpc/model/joint.hpp"
 
 namespace idmpc {
+namespace detail {
+
+// RNEA's backward pass from the body forces in data.F: joint torques with armature and passive
+// forces into data.tau, subtree forces accumulated into data.F
+template <typename S, typename Q, typename Vv, typename Aa>
+void rnea_backward(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+                   const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
+  for (int i = model.n - 1; i >= 0; --i) {
+    const int p = model.parent[i];
+    data.tau[i] = joint_project<S>(model, i, data.F[i]) +
+                  armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(a[i]));
+    if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
+  }
+}
+
+}  // namespace detail
 
 /// @brief Inverse dynamics τ = ID(q, v, a); q, v, a of size n. Fills data.X_up, V, A, h, vJ
 /// and the subtree forces F (used by rnea_vjp). Returns data.tau.
@@ -36,13 +52,7 @@ const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
     data.h[i] = Ii.apply(data.V[i]);
     data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
   }
-  // backward pass: joint torques, subtree forces, armature and passive forces
-  for (int i = model.n - 1; i >= 0; --i) {
-    const int p = model.parent[i];
-    data.tau[i] = joint_project<S>(model, i, data.F[i]) +
-                  armature_and_passive<S>(model, i, S(q[i]), S(v[i]), S(a[i]));
-    if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
-  }
+  detail::rnea_backward(model, data, q, v, a);
   return data.tau;
 }
 
@@ -67,13 +77,7 @@ const VecX<S>& rnea_after_aba(const Model& model, DataTpl<S>& data, const Eigen:
     data.h[i] = Ii.apply(data.V[i]);
     data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
   }
-  // backward pass: joint torques, subtree forces, armature and passive forces
-  for (int i = model.n - 1; i >= 0; --i) {
-    const int p = model.parent[i];
-    data.tau[i] = joint_project<S>(model, i, data.F[i]) +
-                  armature_and_passive<S>(model, i, S(q[i]), S(v[i]), data.qdd[i]);
-    if (p >= 0) data.F[p] += data.X_up[i].apply_transpose_force(data.F[i]);
-  }
+  detail::rnea_backward(model, data, q, v, data.qdd);
   return data.tau;
 }
 
