@@ -1,6 +1,7 @@
 #include "app/atomic_file.hpp"
 
 #include "app/output_paths.hpp"
+#include "idmpc/experiment/file_paths.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -89,7 +90,7 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
     fail("", errno);  // e.g. a path through a file, a loop of links, no search permission
   }
 
-  target_ = resolve_symlinks(path_);
+  target_ = follow_links(path_);
   if (existing && ::access(target_.c_str(), W_OK) != 0) fail("", errno);
   const fs::path parent = fs::path(target_).parent_path();
   const fs::path dir = parent.empty() ? fs::path(".") : parent;

@@ -1,5 +1,7 @@
 #include "app/output_paths.hpp"
 
+#include "idmpc/experiment/file_paths.hpp"
+
 #include <sys/stat.h>
 
 #include <cerrno>
@@ -38,25 +40,12 @@ Identity identity(const std::string& path) {
     return id;
   }
   std::error_code ec;
-  const fs::path canonical = fs::weakly_canonical(resolve_symlinks(path), ec);
+  const fs::path canonical = fs::weakly_canonical(follow_links(path), ec);
   id.canonical = ec ? fs::absolute(path).lexically_normal().string() : canonical.string();
   return id;
 }
 
 }  // namespace
-
-std::string resolve_symlinks(const std::string& original) {
-  fs::path p(original);
-  for (int hops = 0; hops < 40; ++hops) {
-    struct stat st {};
-    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
-    std::error_code ec;
-    const fs::path link = fs::read_symlink(p, ec);
-    if (ec) return p.string();
-    p = link.is_absolute() ? link : p.parent_path() / link;
-  }
-  throw std::runtime_error("cannot write '" + original + "': " + std::strerror(ELOOP));
-}
 
 void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs) {
   std::vector<std::pair<const NamedPath*, Identity>> seen;
@@ -70,7 +59,7 @@ void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<
     if (fs::is_directory(out.path, ec)) {
       throw std::invalid_argument(label(out) + " is a directory: expected a file path");
     }
-    const fs::path parent = fs::path(resolve_symlinks(out.path)).parent_path();
+    const fs::path parent = fs::path(follow_links(out.path)).parent_path();
     if (!parent.empty() && !fs::is_directory(parent, ec)) {
       throw std::invalid_argument(label(out) + ": directory '" + parent.string() + "' does not exist");
     }

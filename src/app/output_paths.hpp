@@ -25,9 +25,4 @@ struct NamedPath {
 /// same file as --in 'x.csv': expected a different output file"
 void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<NamedPath>& outputs);
 
-/// @brief The file a write to `path` lands in: symbolic links followed (also a dangling one, whose
-/// target is then created); `path` itself if it is no link.
-/// @throws std::runtime_error on a loop of links
-std::string resolve_symlinks(const std::string& path);
-
 }  // namespace idmpc::app

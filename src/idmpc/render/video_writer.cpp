@@ -1,5 +1,7 @@
 #include "idmpc/render/video_writer.hpp"
 
+#include "idmpc/experiment/file_paths.hpp"
+
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -122,22 +124,6 @@ bool write_all(int fd, const unsigned char* data, std::size_t size) {
   pthread_sigmask(SIG_SETMASK, &old_set, nullptr);
   errno = saved_errno;
   return ok;
-}
-
-// the file a write to `path` lands in: symbolic links of its last component followed (also a
-// dangling one, whose target is then created); `path` itself if it is no link
-std::string follow_links(const std::string& path) {
-  namespace fs = std::filesystem;
-  fs::path p(path);
-  for (int hops = 0; hops < 40; ++hops) {
-    struct stat st {};
-    if (::lstat(p.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return p.string();
-    std::error_code ec;
-    const fs::path link = fs::read_symlink(p, ec);
-    if (ec) return p.string();
-    p = link.is_absolute() ? link : p.parent_path() / link;
-  }
-  throw std::runtime_error("cannot write '" + path + "': " + errno_text(ELOOP));
 }
 
 // a device, FIFO or socket: written through, never replaced
