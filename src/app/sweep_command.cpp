@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -50,15 +49,11 @@ struct Cell {
   }
 };
 
-// FNV-1a of the task as the cell runs it, so that a resumed sweep never mixes settings
+// the hash of the task as the cell runs it, so that a resumed sweep never mixes settings
 std::string settings_hash(Task task, const std::string& model) {
   task.model = model;  // as named in the grid, not where --models happens to put it
   task.source.clear();
-  std::uint64_t h = 1469598103934665603ULL;
-  for (const unsigned char ch : to_json(task).dump()) h = (h ^ ch) * 1099511628211ULL;
-  char hex[17];
-  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
-  return hex;
+  return text_hash(to_json(task).dump());
 }
 
 struct CellResult {

@@ -245,26 +245,46 @@ std::string RunSummary::label() const {
          " kmax=" + std::to_string(task.kmax);
 }
 
+namespace {
+
+// 64-bit FNV-1a over bytes, written "fnv1a64:<16 hex digits>"
+struct Fnv1a {
+  std::uint64_t h = 14695981039346656037ull;  // offset basis
+  void add(const char* bytes, std::size_t size) {
+    for (std::size_t i = 0; i < size; ++i) {
+      h ^= static_cast<unsigned char>(bytes[i]);
+      h *= 1099511628211ull;  // FNV prime
+    }
+  }
+  std::string hex() const {
+    std::ostringstream o;
+    o << "fnv1a64:" << std::hex << std::setw(16) << std::setfill('0') << h;
+    return o.str();
+  }
+};
+
+}  // namespace
+
 std::string file_hash(const std::string& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (path.empty() || !fs::is_regular_file(path, ec)) return "";
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot read '" + path + "' to hash it");
-  std::uint64_t h = 14695981039346656037ull;  // FNV-1a offset basis
+  Fnv1a f;
   std::vector<char> buffer(1 << 16);
   while (in) {
     in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-    const auto got = static_cast<std::size_t>(in.gcount());
-    for (std::size_t i = 0; i < got; ++i) {
-      h ^= static_cast<unsigned char>(buffer[i]);
-      h *= 1099511628211ull;  // FNV prime
-    }
+    f.add(buffer.data(), static_cast<std::size_t>(in.gcount()));
   }
   if (in.bad()) throw std::runtime_error("cannot read '" + path + "' to hash it");
-  std::ostringstream hex;
-  hex << "fnv1a64:" << std::hex << std::setw(16) << std::setfill('0') << h;
-  return hex.str();
+  return f.hex();
+}
+
+std::string text_hash(const std::string& text) {
+  Fnv1a f;
+  f.add(text.data(), text.size());
+  return f.hex();
 }
 
 nlohmann::json to_json(const RunSummary& s) {

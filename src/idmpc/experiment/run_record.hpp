@@ -71,6 +71,8 @@ struct RunSummary {
 /// "" for an empty path or a path that is no regular file (a device, a FIFO).
 /// @throws std::runtime_error naming the file if it cannot be read
 std::string file_hash(const std::string& path);
+/// @brief The same hash of a string (e.g. a task as JSON), "fnv1a64:<16 hex digits>".
+std::string text_hash(const std::string& text);
 
 nlohmann::json to_json(const RunSummary& s);
 /// @brief Throws std::runtime_error naming `source` for a summary of another schema version or
