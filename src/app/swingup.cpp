@@ -1,6 +1,5 @@
 #include "app/swingup.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -169,8 +168,9 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
 
 SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback) {
   SwingupOutcome out = run_once(task, log_path);
-  const bool no_Qa = std::all_of(task.Qa.begin(), task.Qa.end(), [](double x) { return x == 0; });
-  if (!(fallback && out.summary.diverged && task.formulation == "id" && no_Qa && task.Qa_fallback > 0)) return out;
+  if (!(fallback && out.summary.diverged && task.formulation == "id" && without_Qa(task) && task.Qa_fallback > 0)) {
+    return out;
+  }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the fallback Q_a
   std::ostringstream said;
   said << "ID diverged at t = " << out.summary.diverged_at << " s with Qa = 0 (" << out.summary.divergence_reason

@@ -284,11 +284,13 @@ ResolvedTask resolve(const Task& t, int n) {
   return r;
 }
 
+bool without_Qa(const Task& t) {
+  return std::all_of(t.Qa.begin(), t.Qa.end(), [](double x) { return x == 0; });
+}
+
 std::string divergence_hint(const Task& t) {
   std::vector<std::string> tries;
-  const bool id = t.formulation == "id";
-  const bool no_Qa = std::all_of(t.Qa.begin(), t.Qa.end(), [](double x) { return x == 0; });
-  if (id && no_Qa) {
+  if (t.formulation == "id" && without_Qa(t)) {
     const double Qa = t.Qa_fallback > 0 ? t.Qa_fallback : 1e-4;
     tries.push_back("--Qa " + text(Qa) + " (a small weight on the accelerations, the paper's fallback" +
                     std::string(t.Qa_fallback > 0 ? "; `swingup --fallback` reruns with it" : "") + ")");

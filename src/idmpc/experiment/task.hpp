@@ -86,6 +86,10 @@ struct ResolvedTask {
 /// non-negative weights, finite values, valid C/GMRES settings).
 ResolvedTask resolve(const Task& task, int n);
 
+/// @brief Whether the task weights no acceleration (every Q_a is 0): the case the paper's
+/// Q_a fallback is for.
+bool without_Qa(const Task& task);
+
 /// @brief What to try after a divergence of this task, as options to change: one line
 /// starting "try ", e.g. a small Q_a for ID, the full-horizon start, a larger R, a smaller ζ.
 std::string divergence_hint(const Task& task);
