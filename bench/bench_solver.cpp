@@ -32,7 +32,7 @@
 #include "bench_support.hpp"
 #include "idmpc/experiment/task.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 #include "idmpc/solver/controller.hpp"
 
 namespace idmpc::bench {
@@ -83,7 +83,7 @@ struct SolverFixture {
   decltype(std::declval<Case>().key()) key;
   const BenchModel* bm = nullptr;
   double Qa = 0;
-  std::unique_ptr<SingleShooting> ocp;
+  std::unique_ptr<Shooting> ocp;
   std::unique_ptr<Cgmres> start;  // right after the zero-horizon initialization at t = 0
   std::optional<Cgmres> solver;   // replays the record from `start`
   std::vector<double> t;
@@ -100,7 +100,7 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   const ResolvedTask paper = paper_setup(n, f.Qa, c.kmax);
   const VecX<double>& q0 = paper.q0;
   const VecX<double> v0 = VecX<double>::Zero(n);
-  f.ocp = std::make_unique<SingleShooting>(f.bm->model(), c.controller.formulation, c.controller.mode,
+  f.ocp = std::make_unique<Shooting>(f.bm->model(), c.controller.formulation, c.controller.mode,
                                            paper.weights, paper.qref, c.N);
   f.ocp->set_stage_batching(c.controller.simd_stages);
   const CgmresSettings& settings = paper.cgmres;

@@ -17,7 +17,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 
 namespace idmpc {
@@ -143,7 +143,7 @@ TEST_P(OcpGradient, ResidualIsTheScaledGradientOfTheDiscreteCost) {
     const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
     const VecX<double> U =
         formulation == Formulation::kInverseDynamics ? A : torques_of(p.model, data, A, q0, v0, T, N);
-    SingleShooting ocp(p.model, formulation, mode, w, q_ref, N);
+    Shooting ocp(p.model, formulation, mode, w, q_ref, N);
     VecX<double> F(N * n);
     ocp.residual(U, q0, v0, T, F);
 
@@ -229,7 +229,7 @@ TEST_P(OcpGradient, WithTorqueLimitsResidualIsTheGradientOfTheAugmentedCost) {
     const VecX<double> Utorque = torques_of(p.model, data, A, q0, v0, T, N);
     const TorqueLimits limits = limits_around(Utorque, n, N);
     for (const bool lanes : {true, false}) {
-      SingleShooting ocp(p.model, formulation, mode, w, q_ref, N, limits);
+      Shooting ocp(p.model, formulation, mode, w, q_ref, N, limits);
       ocp.set_stage_batching(lanes);
       if (lanes != ocp.stage_batching()) continue;  // lanes: ID adjoint only
       SCOPED_TRACE("seed " + std::to_string(seed) + (lanes ? ", lanes" : ", stage by stage"));
@@ -290,7 +290,7 @@ TEST(OcpTorqueReference, RestAtTheTargetUnderGravityIsStationary) {
       for (const DerivativeMode mode : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
         SCOPED_TRACE(path + " " + to_string(f) + " " + to_string(mode));
         const OcpWeights w = paper_weights(n, 1e-3);
-        SingleShooting ocp(p.model, f, mode, w, q_ref, N);
+        Shooting ocp(p.model, f, mode, w, q_ref, N);
         EXPECT_LE((ocp.problem().cost().u_ref() - u_ref).cwiseAbs().maxCoeff(), 1e-12);
         VecX<double> U(N * n);
         for (int i = 0; i < N; ++i) U.segment(i * n, n) = f == Formulation::kForwardDynamics ? u_ref : zero;
@@ -328,8 +328,8 @@ TEST(OcpFormulations, IdResidualIsFdResidualThroughTheChainRuleWhenQaIsZero) {
         const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
         Data data(p.model);
         const VecX<double> U = torques_of(p.model, data, A, q0, v0, T, N);
-        SingleShooting fd(p.model, Formulation::kForwardDynamics, mode, w, q_ref, N);
-        SingleShooting id(p.model, Formulation::kInverseDynamics, mode, w, q_ref, N);
+        Shooting fd(p.model, Formulation::kForwardDynamics, mode, w, q_ref, N);
+        Shooting id(p.model, Formulation::kInverseDynamics, mode, w, q_ref, N);
         VecX<double> Ffd(N * n), Fid(N * n);
         fd.residual(U, q0, v0, T, Ffd);
         id.residual(A, q0, v0, T, Fid);

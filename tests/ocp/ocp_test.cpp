@@ -12,7 +12,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 #include "support/test_models.hpp"
 
@@ -46,9 +46,9 @@ TEST_P(OcpModes, MatrixAndAdjointGiveTheSameResidual) {
   for (unsigned seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     std::mt19937 rng(seed);
-    SingleShooting matrix(p.model, formulation, DerivativeMode::kMatrix, paper_weights(n, 1e-3),
+    Shooting matrix(p.model, formulation, DerivativeMode::kMatrix, paper_weights(n, 1e-3),
                VecX<double>::Zero(n), N);
-    SingleShooting adjoint(p.model, formulation, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
+    Shooting adjoint(p.model, formulation, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
                 VecX<double>::Zero(n), N);
     const VecX<double> U = random_vector(rng, N * n, 5.0), q0 = random_vector(rng, n, 2.0),
                        v0 = random_vector(rng, n, 1.0);
@@ -76,7 +76,7 @@ TEST(OcpFrechetProduct, ForwardDifferenceWithH1e8IsAccurate) {
       for (const DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
         if (name == "chain32" && f == Formulation::kForwardDynamics && d == DerivativeMode::kMatrix) continue;
         SCOPED_TRACE(name + " " + to_string(f) + " " + to_string(d));
-        SingleShooting ocp(p.model, f, d, paper_weights(n, 0.0), VecX<double>::Zero(n), N);
+        Shooting ocp(p.model, f, d, paper_weights(n, 0.0), VecX<double>::Zero(n), N);
         VecX<double> F0(N * n), Fp(N * n), Fm(N * n);
         ocp.residual(U, q0, v0, 0.1, F0);
         ocp.residual(U + kH * W, q0, v0, 0.1, Fp);
@@ -98,9 +98,9 @@ TEST(OcpStageBatching, SimdLanesGiveTheSameResidualAsStageByStage) {
     for (int N : {1, 7, 25}) {
       SCOPED_TRACE(path + " N=" + std::to_string(N));
       std::mt19937 rng(static_cast<unsigned>(N));
-      SingleShooting lanes(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
+      Shooting lanes(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
                 VecX<double>::Zero(n), N);
-      SingleShooting single(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
+      Shooting single(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n, 1e-3),
                  VecX<double>::Zero(n), N);
       single.set_stage_batching(false);
       ASSERT_TRUE(lanes.stage_batching());
@@ -147,9 +147,9 @@ TEST(OcpTorqueLimits, MatrixAdjointAndLanesGiveTheSameResidual) {
       for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
         SCOPED_TRACE(name + " " + to_string(f) + " N=" + std::to_string(N));
         std::mt19937 rng(static_cast<unsigned>(N));
-        SingleShooting matrix(p.model, f, DerivativeMode::kMatrix, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
-        SingleShooting adjoint(p.model, f, DerivativeMode::kAdjoint, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
-        SingleShooting single(p.model, f, DerivativeMode::kAdjoint, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
+        Shooting matrix(p.model, f, DerivativeMode::kMatrix, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
+        Shooting adjoint(p.model, f, DerivativeMode::kAdjoint, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
+        Shooting single(p.model, f, DerivativeMode::kAdjoint, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, limits);
         single.set_stage_batching(false);
         ASSERT_EQ(adjoint.stage_batching(), f == Formulation::kInverseDynamics);
         ASSERT_EQ(matrix.problem().m(), (n + 2) / 3);
@@ -180,8 +180,8 @@ TEST(OcpTorqueLimits, UnboundedJointsAddNothing) {
                      v0 = random_vector(rng, n, 1.0);
   for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
     for (const DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
-      SingleShooting none(p.model, f, d, paper_weights(n, 1e-3), VecX<double>::Zero(n), N);
-      SingleShooting unbounded(p.model, f, d, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, open);
+      Shooting none(p.model, f, d, paper_weights(n, 1e-3), VecX<double>::Zero(n), N);
+      Shooting unbounded(p.model, f, d, paper_weights(n, 1e-3), VecX<double>::Zero(n), N, open);
       EXPECT_EQ(none.problem().m(), 0);
       EXPECT_EQ(unbounded.problem().m(), 0);
       EXPECT_EQ(unbounded.stage_dim(), n);

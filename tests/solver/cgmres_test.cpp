@@ -15,7 +15,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 #include "idmpc/solver/cgmres.hpp"
 
@@ -81,7 +81,7 @@ TEST_P(ZeroHorizon, InitializationSolvesTheFullProblemAtTZero) {
       SCOPED_TRACE("seed " + std::to_string(seed) + ", Qa " + std::to_string(Qa));
       std::mt19937 rng(seed);
       const VecX<double> q0 = random_vector(rng, n, 2.0), v0 = random_vector(rng, n, 1.0);
-      SingleShooting ocp(p.model, formulation, mode, paper_weights(n, Qa), VecX<double>::Zero(n), N);
+      Shooting ocp(p.model, formulation, mode, paper_weights(n, Qa), VecX<double>::Zero(n), N);
       Cgmres solver(ocp, CgmresSettings{});
       const double reached = solver.initialize(0.0, q0, v0);
       EXPECT_LE(reached, kInitResidual);
@@ -122,7 +122,7 @@ TEST_P(Frechet, ForwardDifferenceProductMatchesCentralDifferenceAndJacobian) {
   for (unsigned seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     std::mt19937 rng(seed);
-    SingleShooting ocp(p.model, formulation, mode, paper_weights(n, 1e-4), VecX<double>::Zero(n), N);
+    Shooting ocp(p.model, formulation, mode, paper_weights(n, 1e-4), VecX<double>::Zero(n), N);
     const VecX<double> q0 = random_vector(rng, n, 2.0), v0 = random_vector(rng, n, 1.0);
     const VecX<double> U = random_vector(rng, dim, 5.0), W = random_vector(rng, dim, 1.0);
     auto F = [&](const VecX<double>& X) {
@@ -171,8 +171,8 @@ TEST_P(Continuation, UpdateWithFullKrylovSpaceSolvesTheContinuationEquation) {
   const auto& [formulation, mode] = GetParam();
   const Problem p = load_problem(kArm4);
   const int n = 4, N = 4, dim = N * n;
-  SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
-  SingleShooting probe(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
+  Shooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
+  Shooting probe(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
   CgmresSettings s;
   s.kmax = dim;
   Cgmres solver(ocp, s);
@@ -211,7 +211,7 @@ TEST_P(Continuation, UpdateWithFullKrylovSpaceSolvesTheContinuationEquation) {
 TEST_P(Continuation, UpdateCostsKmaxPlusThreeEvaluations) {
   const auto& [formulation, mode] = GetParam();
   const Problem p = load_problem(kArm4);
-  SingleShooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25);
+  Shooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25);
   CgmresSettings s;
   s.kmax = 5;
   Cgmres solver(ocp, s);
@@ -232,7 +232,7 @@ struct EulerPlant {
 };
 
 // F at the plant's state, and the plant's acceleration a_0 under the current solution
-double residual_at(SingleShooting& probe, const Cgmres& solver, const EulerPlant& x, VecX<double>* a0,
+double residual_at(Shooting& probe, const Cgmres& solver, const EulerPlant& x, VecX<double>* a0,
                    VecX<double>* F_out = nullptr) {
   VecX<double> F(probe.dim());
   probe.residual(solver.solution(), x.q, x.v, solver.horizon(x.t), F);
@@ -249,8 +249,8 @@ TEST_P(Continuation, OneUpdateReducesTheResidualByOneMinusZetaDt) {
   double previous_error = 0;
   for (double dt : {1e-3, 5e-4, 2.5e-4, 1.25e-4}) {
     SCOPED_TRACE("dt " + std::to_string(dt));
-    SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
-    SingleShooting probe(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
+    Shooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
+    Shooting probe(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
     CgmresSettings s;
     s.kmax = N * n;  // exact linear solve: only the O(Δt²) terms remain
     s.zeta = zeta;
@@ -283,8 +283,8 @@ TEST_P(Continuation, RepeatedUpdatesDriveTheResidualDownGeometrically) {
   const auto& [formulation, mode] = GetParam();
   const Problem p = load_problem(kArm4);
   const int n = 4, N = 25;
-  SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
-  SingleShooting probe(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
+  Shooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
+  Shooting probe(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N);
   CgmresSettings s;  // kmax = 10, Δt = 1 ms
   s.alpha = 0;       // fixed horizon T_f: ∂F/∂t = 0
   s.zeta = 0.1 / s.dt;
@@ -323,8 +323,8 @@ TEST(FrozenState, ConvergesToTheContinuationFixedPointNotToZero) {
   const int n = 4, N = 10;
   for (DerivativeMode mode : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
     SCOPED_TRACE(to_string(mode));
-    SingleShooting ocp(p.model, Formulation::kInverseDynamics, mode, paper_weights(n), VecX<double>::Zero(n), N);
-    SingleShooting probe(p.model, Formulation::kInverseDynamics, mode, paper_weights(n), VecX<double>::Zero(n), N);
+    Shooting ocp(p.model, Formulation::kInverseDynamics, mode, paper_weights(n), VecX<double>::Zero(n), N);
+    Shooting probe(p.model, Formulation::kInverseDynamics, mode, paper_weights(n), VecX<double>::Zero(n), N);
     CgmresSettings s;
     s.alpha = 0;
     s.zeta = 0.1 / s.dt;
@@ -356,7 +356,7 @@ TorqueLimits arm4_limits(double bound) {
 }
 
 // every stage's torque within its bounds, d > 0 and ρ > 0
-void expect_inside(const SingleShooting& ocp, const VecX<double>& U, const TorqueLimits& limits, double slack) {
+void expect_inside(const Shooting& ocp, const VecX<double>& U, const TorqueLimits& limits, double slack) {
   const int n = ocp.n(), m = ocp.problem().m(), sd = ocp.stage_dim();
   for (int i = 0; i < ocp.N(); ++i) {
     SCOPED_TRACE("stage " + std::to_string(i));
@@ -382,7 +382,7 @@ TEST_P(Continuation, ZeroHorizonInitializationWithTorqueLimits) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     std::mt19937 rng(seed);
     const VecX<double> q0 = random_vector(rng, n, 2.0), v0 = random_vector(rng, n, 1.0);
-    SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
+    Shooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
     Cgmres solver(ocp, CgmresSettings{});
     EXPECT_LE(solver.initialize(0.0, q0, v0), kInitResidual);
     VecX<double> F(ocp.dim());
@@ -408,7 +408,7 @@ TEST_P(Continuation, FullHorizonInitializationWithAndWithoutTorqueLimits) {
   for (const bool limited : {false, true}) {
     SCOPED_TRACE(limited ? "limits" : "no limits");
     const TorqueLimits limits = limited ? arm4_limits(20.0) : TorqueLimits{};
-    SingleShooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
+    Shooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
     Cgmres solver(ocp, s);
     EXPECT_LE(solver.initialize(0.0, q0, v0), kFullInitResidual);
     VecX<double> F(ocp.dim());
@@ -429,7 +429,7 @@ TEST_P(Continuation, FullHorizonInitializationWithAndWithoutTorqueLimits) {
 TEST_P(Continuation, UpdateWithTorqueLimitsCostsKmaxPlusFourEvaluations) {
   const auto& [formulation, mode] = GetParam();
   const Problem p = load_problem(kArm4);
-  SingleShooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, arm4_limits(20.0));
+  Shooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, arm4_limits(20.0));
   CgmresSettings s;
   s.kmax = 5;
   Cgmres solver(ocp, s);
@@ -459,15 +459,15 @@ template <typename Fn> void expect_invalid(Fn&& fn, const std::string& needle) {
 class BadSettings : public ::testing::Test {
  protected:
   BadSettings() : p_(load_problem(kArm4)) {}
-  SingleShooting make_ocp(int N = 5) {
-    return SingleShooting(p_.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(4),
+  Shooting make_ocp(int N = 5) {
+    return Shooting(p_.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(4),
                VecX<double>::Zero(4), N);
   }
   void expect_refused(const CgmresSettings& s, const std::string& needle) {
     SCOPED_TRACE(needle);
     expect_invalid([&] { s.validate(); }, needle);
     expect_invalid([&] {
-      SingleShooting ocp = make_ocp();
+      Shooting ocp = make_ocp();
       Cgmres solver(ocp, s);
     }, needle);
   }
@@ -476,7 +476,7 @@ class BadSettings : public ::testing::Test {
 
 TEST_F(BadSettings, DefaultsAreValid) {
   EXPECT_NO_THROW(CgmresSettings{}.validate());
-  SingleShooting ocp = make_ocp();
+  Shooting ocp = make_ocp();
   EXPECT_NO_THROW(Cgmres(ocp, CgmresSettings{}));
 }
 
@@ -544,11 +544,11 @@ TEST_F(BadSettings, WeightsOfTheWrongSize) {
                                                      : w.R;
     bad = VecX<double>::Ones(3);
     expect_invalid([&] {
-      SingleShooting(p_.model, Formulation::kForwardDynamics, DerivativeMode::kMatrix, w, VecX<double>::Zero(4), 5);
+      Shooting(p_.model, Formulation::kForwardDynamics, DerivativeMode::kMatrix, w, VecX<double>::Zero(4), 5);
     }, which);
   }
   expect_invalid([&] {
-    SingleShooting(p_.model, Formulation::kInverseDynamics, DerivativeMode::kMatrix, paper_weights(4),
+    Shooting(p_.model, Formulation::kInverseDynamics, DerivativeMode::kMatrix, paper_weights(4),
         VecX<double>::Zero(5), 5);
   }, "q_ref");
 }
@@ -557,7 +557,7 @@ TEST_F(BadSettings, ForwardDynamicsNeedsPositiveR) {
   OcpWeights w = paper_weights(4);
   w.R[2] = 0;
   expect_invalid([&] {
-    SingleShooting(p_.model, Formulation::kForwardDynamics, DerivativeMode::kAdjoint, w, VecX<double>::Zero(4), 5);
+    Shooting(p_.model, Formulation::kForwardDynamics, DerivativeMode::kAdjoint, w, VecX<double>::Zero(4), 5);
   }, "R");
 }
 

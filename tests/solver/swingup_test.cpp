@@ -19,7 +19,7 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/mujoco/plant.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 #include "idmpc/solver/controller.hpp"
 
 namespace idmpc {

@@ -52,6 +52,14 @@ const CgmresSettings& validated(const CgmresSettings& s) {
 
 }  // namespace
 
+std::string to_string(ShootingScheme s) { return s == ShootingScheme::kSingle ? "single" : "multiple"; }
+
+ShootingScheme parse_shooting(const std::string& s) {
+  if (s == "single") return ShootingScheme::kSingle;
+  if (s == "multiple") return ShootingScheme::kMultiple;
+  throw std::invalid_argument("shooting must be 'single' or 'multiple', got '" + s + "'");
+}
+
 void CgmresSettings::validate() const {
   require(kmax >= 1, "kmax must be at least 1", kmax);
   require(dt > 0 && std::isfinite(dt), "sampling period dt must be positive", dt);
@@ -64,7 +72,7 @@ void CgmresSettings::validate() const {
           alpha);
 }
 
-Cgmres::Cgmres(SingleShooting& ocp, const CgmresSettings& settings)
+Cgmres::Cgmres(Shooting& ocp, const CgmresSettings& settings)
     : ocp_(ocp),
       settings_(validated(settings)),
       horizon_(settings.Tf, settings.alpha),
@@ -73,6 +81,28 @@ Cgmres::Cgmres(SingleShooting& ocp, const CgmresSettings& settings)
   const int dim = ocp.dim(), n = ocp.n();
   for (VecX<double>* x : {&U_, &Udot_, &F_, &Fx_, &Fw_, &Uw_, &b_}) *x = VecX<double>::Zero(dim);
   for (VecX<double>* x : {&qh_, &vh_, &a0_}) *x = VecX<double>::Zero(n);
+  X_.resize(n, ocp.N());
+  E_.resize(n, ocp.N());
+  Eh_.resize(n, ocp.N());
+}
+
+void Cgmres::set_solution(const Eigen::Ref<const VecX<double>>& U) {
+  if (U.size() != U_.size()) {
+    throw std::invalid_argument("solution has " + std::to_string(U.size()) + " entries, expected " +
+                                std::to_string(U_.size()));
+  }
+  U_ = U;
+  Udot_.setZero();
+}
+
+void Cgmres::set_trajectory(const ShootingTrajectory& X) {
+  const auto n = static_cast<Eigen::Index>(ocp_.n()), cols = static_cast<Eigen::Index>(ocp_.N() + 1);
+  for (const MatX<double>* x : {&X.q, &X.v, &X.lmd, &X.gmm}) {
+    if (x->rows() != n || x->cols() != cols) {
+      throw std::invalid_argument("trajectory must be " + std::to_string(n) + " x " + std::to_string(cols));
+    }
+  }
+  X_ = X;
 }
 
 double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
@@ -126,6 +156,12 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
   if (full) norm = solve_full_horizon(q, v, T);
   Udot_.setZero();
   residual_norm_ = norm;
+  if (multiple()) {
+    // the stored trajectories start as the rollout of the solution: zero defects
+    ocp_.residual(U_, q, v, T, F_);
+    X_ = ocp_.trajectory();
+    E_.resize(ocp_.n(), ocp_.N());
+  }
   return norm;
 }
 
@@ -214,36 +250,67 @@ void Cgmres::synchronize_dummy() {
   }
 }
 
+void Cgmres::evaluate(const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
+                      double T) {
+  if (multiple()) {
+    ocp_.residual_at(U_, X_, q, v, T, F_, E_);
+  } else {
+    ocp_.residual(U_, q, v, T, F_);
+  }
+}
+
 bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
                     const Eigen::Ref<const VecX<double>>& v) {
+  return step(t, q, v, false);
+}
+
+bool Cgmres::newton_step(double t, const Eigen::Ref<const VecX<double>>& q,
+                         const Eigen::Ref<const VecX<double>>& v) {
+  return step(t, q, v, true);
+}
+
+bool Cgmres::step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
+                  bool frozen) {
   using clock = std::chrono::steady_clock;
   const auto start = timing_ ? clock::now() : clock::time_point{};
   if (timing_) ocp_.reset_times();
   const long evals0 = ocp_.times().evaluations;
-  const double h = settings_.h, T = horizon_.length(t), Th = horizon_.length(t + h);
+  const double h = settings_.h, T = horizon_.length(t), Th = frozen ? T : horizon_.length(t + h);
+  const double zeta = frozen ? 1.0 / settings_.dt : settings_.zeta;
   failure_.clear();
 
-  // F at the measured state, and at the state predicted h ahead with ẋ = (v, a_0); with torque
-  // limits, (d, ρ) first made consistent with the torques at the measured state
-  ocp_.residual(U_, q, v, T, F_);
-  if (ocp_.problem().m() > 0) {
+  // F at the measured state (multiple shooting: with the defects of the stored trajectories),
+  // and at the state predicted h ahead with ẋ = (v, a_0); with torque limits, (d, ρ) first made
+  // consistent with the torques at the measured state
+  evaluate(q, v, T);
+  if (ocp_.problem().m() > 0 && !frozen) {
     synchronize_dummy();
-    ocp_.residual(U_, q, v, T, F_);
+    evaluate(q, v, T);
   }
-  residual_norm_ = F_.norm();
+  residual_norm_ = std::sqrt(F_.squaredNorm() + (multiple() ? E_.squared_norm() : 0.0));
   constraint_violation_ = ocp_.problem().m() > 0 ? ocp_.problem().torque_bounds().violation(ocp_.torques()) : 0.0;
   a0_ = ocp_.first_acceleration();
-  qh_ = q + h * v;
-  vh_ = v + h * a0_;
-  ocp_.residual(U_, qh_, vh_, Th, Fx_);
+  qh_ = q;
+  vh_ = v;
+  if (!frozen) {
+    qh_ += h * v;
+    vh_ += h * a0_;
+  }
+  // multiple shooting: the defects h ahead, decayed as Ė = −ζE
+  const ShootingDefects* defects = nullptr;
+  if (multiple()) {
+    Eh_.assign_scaled(E_, 1.0 - h * zeta);
+    defects = &Eh_;
+  }
+  ocp_.residual(U_, qh_, vh_, Th, Fx_, defects);
 
   // right-hand side b = −ζF − (∂F/∂x ẋ + ∂F/∂t) by forward difference
-  b_ = -settings_.zeta * F_ - (Fx_ - F_) / h;
+  b_ = -zeta * F_ - (Fx_ - F_) / h;
   if (!(b_.allFinite() && std::isfinite(b_.norm()))) {
     // GMRES would return U̇ unchanged and the loop would go on without acting
     failure_ = F_.allFinite() && Fx_.allFinite()
                    ? "the continuation's right-hand side -zeta F - (F(x + h xdot) - F)/h is not finite (zeta = " +
-                         text(settings_.zeta) + ", h = " + text(h) + ")"
+                         text(zeta) + ", h = " + text(h) + ")"
                    : "the optimality residual F became non-finite";
     return false;
   }
@@ -252,7 +319,7 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
   bool vanished = false;
   auto apply = [&](const Eigen::Ref<const VecX<double>>& W, Eigen::Ref<VecX<double>> out) {
     Uw_ = U_ + h * W;
-    ocp_.residual(Uw_, qh_, vh_, Th, Fw_);
+    ocp_.residual(Uw_, qh_, vh_, Th, Fw_, defects);
     // h·W below the resolution of U or F: the product is 0 and GMRES would report convergence
     if (Fw_ == Fx_ && !W.isZero(0)) vanished = true;
     out = (Fw_ - Fx_) / h;
@@ -262,6 +329,18 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
     failure_ = "the Frechet products (F(U + hW) - F(U))/h vanish: h = " + text(h) +
                " is below the resolution of U and F (try h = 1e-8)";
     return false;
+  }
+  if (multiple()) {
+    // the stored trajectories move along the condensed direction: (retrieved − stored)/h
+    Uw_ = U_ + h * Udot_;
+    ocp_.residual(Uw_, qh_, vh_, Th, Fw_, defects);
+    const ShootingTrajectory& r = ocp_.trajectory();
+    const double f = settings_.dt / h;
+    const Eigen::Index N = ocp_.N();
+    X_.q.rightCols(N) += f * (r.q.rightCols(N) - X_.q.rightCols(N));
+    X_.v.rightCols(N) += f * (r.v.rightCols(N) - X_.v.rightCols(N));
+    X_.lmd.rightCols(N) += f * (r.lmd.rightCols(N) - X_.lmd.rightCols(N));
+    X_.gmm.rightCols(N) += f * (r.gmm.rightCols(N) - X_.gmm.rightCols(N));
   }
   U_ += settings_.dt * Udot_;
   evaluations_ = static_cast<int>(ocp_.times().evaluations - evals0);
@@ -274,8 +353,12 @@ bool Cgmres::update(double t, const Eigen::Ref<const VecX<double>>& q,
   }
   if (!(U_.allFinite() && Udot_.allFinite())) {
     failure_ = "the C/GMRES solution became non-finite";
+  } else if (multiple() && !X_.all_finite()) {
+    failure_ = "the multiple-shooting states or costates became non-finite";
   } else if (!(U_.cwiseAbs().maxCoeff() < kBlowUp)) {
     failure_ = "the C/GMRES solution exceeded 1e8";
+  } else if (multiple() && !(X_.max_abs() < kBlowUp)) {
+    failure_ = "the multiple-shooting states or costates exceeded 1e8";
   } else if (!(residual_norm_ < kBlowUp)) {
     failure_ = "the optimality residual |F| exceeded 1e8";
   }

@@ -1,20 +1,39 @@
 #pragma once
 /// @file cgmres.hpp
-/// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6), one solver for every problem
-/// (single shooting):
+/// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6, §9), one solver for every problem and
+/// both shooting schemes:
 /// Ḟ = −ζF is tracked by solving (∂F/∂U) U̇ = −ζF − (∂F/∂x)ẋ − ∂F/∂t with matrix-free
 /// forward-difference products and kmax GMRES iterations, then U ← U + Δt U̇.
+///
+/// Multiple shooting (as in Ohtsuka's and autogenu's multiple-shooting C/GMRES): the states and
+/// costates of stages 1 … N are unknowns too, and all residuals — F_U and the defects E of the
+/// state and costate equations — follow Ḟ = −ζF. Condensing: for a direction W, the state and
+/// costate directions are those that make the defects decay, Ė = −ζE; by forward difference,
+/// the trajectories retrieved from (U + hW, x + hẋ, t + h) with the defects (1 − hζ)E
+/// (Shooting::residual with defects). So F_U is a function G of U alone and GMRES runs on U:
+///   b = −ζG − [G(U, x + hẋ, t + h; (1 − hζ)E) − G(U, x, t; E)] / h,
+///   A W = [G(U + hW, x + hẋ, t + h; (1 − hζ)E) − G(U, x + hẋ, t + h; (1 − hζ)E)] / h,
+/// and the stored trajectories move by Δt·(retrieved at U + hU̇ − stored)/h: one evaluation more
+/// per update than single shooting. With E = 0 and the stored trajectories those of the rollout,
+/// the two schemes take the same step.
 
 #include <string>
 
 #include "idmpc/solver/gmres.hpp"
 #include "idmpc/solver/horizon.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 
 namespace idmpc {
 
+/// @brief How the horizon's stages are chained (DESIGN §9).
+enum class ShootingScheme { kSingle, kMultiple };
+/// @brief "single"/"multiple"; parse throws std::invalid_argument naming the value.
+std::string to_string(ShootingScheme s);
+ShootingScheme parse_shooting(const std::string& s);
+
 struct CgmresSettings {
   int kmax = 10;
+  ShootingScheme shooting = ShootingScheme::kSingle;
   double Tf = 0.5;
   double alpha = 1.0;
   double dt = 1e-3;    ///< sampling period Δt
@@ -40,7 +59,7 @@ struct UpdateTimes {
 
 class Cgmres {
  public:
-  Cgmres(SingleShooting& ocp, const CgmresSettings& settings);
+  Cgmres(Shooting& ocp, const CgmresSettings& settings);
 
   /// @brief Zero-horizon initialization at time t: Newton on the one-stage problem F_0 = 0
   /// (every stage sees x), copied to all stages. With torque limits, Newton first on the input
@@ -48,7 +67,9 @@ class Cgmres {
   /// torque. With settings.init_full_horizon and T(t) > 0, that one-stage solution at T = 0
   /// starts a continuation: the horizon grown to T(t) in kInitHorizonSteps, then (with limits)
   /// the dummy weight brought down from 10⁴ × nominal, each level solved by damped
-  /// Newton–GMRES keeping d, ρ > 0. Returns ‖F‖ reached (one stage, or all N stages).
+  /// Newton–GMRES keeping d, ρ > 0. Returns ‖F‖ reached (one stage, or all N stages). Under
+  /// multiple shooting the stored trajectories are then those of the solution's rollout (zero
+  /// defects): both schemes start from the same point.
   double initialize(double t, const Eigen::Ref<const VecX<double>>& q,
                     const Eigen::Ref<const VecX<double>>& v);
 
@@ -61,37 +82,59 @@ class Cgmres {
   bool update(double t, const Eigen::Ref<const VecX<double>>& q,
               const Eigen::Ref<const VecX<double>>& v);
 
+  /// @brief One Newton–GMRES step on the problem frozen at (t, x), under the configured scheme:
+  /// the update with ẋ = 0, no time derivative and ζ = 1/Δt (a full step), and (d, ρ) left as
+  /// they are (not made consistent with the torques, which would undo the step on them).
+  /// Returns false on divergence, as update.
+  bool newton_step(double t, const Eigen::Ref<const VecX<double>>& q,
+                   const Eigen::Ref<const VecX<double>>& v);
+
   /// @brief Why the last update returned false (empty after a good one).
   const std::string& failure() const { return failure_; }
   const VecX<double>& solution() const { return U_; }
+  /// @brief Warm start: the solution U (size Shooting::dim), its rate zeroed.
+  void set_solution(const Eigen::Ref<const VecX<double>>& U);
+  /// @brief Multiple shooting: the stored states and costates (columns 1 … N are the unknowns).
+  const ShootingTrajectory& trajectory() const { return X_; }
+  void set_trajectory(const ShootingTrajectory& X);
+  /// @brief Multiple shooting: the defects of the stored trajectories at the start of the last
+  /// update (zero under single shooting).
+  const ShootingDefects& defects() const { return E_; }
   const VecX<double>& solution_rate() const { return Udot_; }
   /// @brief ‖F(U, x, t)‖ at the start of the last update (the optimality error of the solution
-  /// being tracked, at the measured state).
+  /// being tracked, at the measured state); under multiple shooting ‖(F_U, E)‖.
   double residual_norm() const { return residual_norm_; }
   /// @brief With torque limits: how far the stage torques of the solution being tracked leave
   /// their bounds at the start of the last update, TorqueBounds::violation [N m] (0 without).
   double constraint_violation() const { return constraint_violation_; }
   int gmres_iterations() const { return iterations_; }
-  /// @brief F evaluations in the last update (kmax + 3 unless GMRES stopped early; kmax + 4
-  /// with torque limits).
+  /// @brief F evaluations in the last update (kmax + 3 unless GMRES stopped early; one more
+  /// with torque limits, one more under multiple shooting).
   int evaluations() const { return evaluations_; }
   const UpdateTimes& last_times() const { return times_; }
   void enable_timing(bool on) { timing_ = on; ocp_.enable_timing(on); }
   const CgmresSettings& settings() const { return settings_; }
-  const SingleShooting& ocp() const { return ocp_; }
+  const Shooting& ocp() const { return ocp_; }
   double horizon(double t) const { return horizon_.length(t); }
 
  private:
   double solve_full_horizon(const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
                             double T);
   void synchronize_dummy();
+  // the update at (t, x); frozen: newton_step
+  bool step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v, bool frozen);
+  // F at the measured state under the scheme (multiple: also the defects E_)
+  void evaluate(const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v, double T);
+  bool multiple() const { return settings_.shooting == ShootingScheme::kMultiple; }
 
-  SingleShooting& ocp_;
+  Shooting& ocp_;
   CgmresSettings settings_;
   Horizon horizon_;
   Gmres gmres_;
   bool timing_ = false;
   VecX<double> U_, Udot_, F_, Fx_, Fw_, Uw_, b_, qh_, vh_, a0_;
+  ShootingTrajectory X_;    ///< multiple shooting: stored states and costates
+  ShootingDefects E_, Eh_;  ///< their defects at the measured state, and (1 − hζ)E
   double residual_norm_ = 0;
   double constraint_violation_ = 0;
   std::string failure_;

@@ -14,7 +14,7 @@
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/solver/cgmres.hpp"
-#include "idmpc/solver/single_shooting.hpp"
+#include "idmpc/solver/shooting.hpp"
 
 namespace idmpc {
 
@@ -34,7 +34,7 @@ class Controller {
   double dt() const { return solver_.settings().dt; }
   const OcpProblem& problem() const { return nlp_.problem(); }
   const VecX<double>& q_ref() const { return nlp_.problem().cost().q_ref(); }
-  SingleShooting& nlp() { return nlp_; }
+  Shooting& nlp() { return nlp_; }
   const Cgmres& solver() const { return solver_; }
   Cgmres& solver() { return solver_; }
 
@@ -73,7 +73,7 @@ class Controller {
   // clamped to the actuator limits
   void torque_rule(In q, In v, In a0_hat, double dt);
 
-  SingleShooting nlp_;
+  Shooting nlp_;
   Cgmres solver_;
   const Model& plant_model_;  ///< for the ID torque
   Data data_;                 ///< for the ID torque
