@@ -29,6 +29,7 @@ struct SweepOptions {
   std::string models_dir = IDMPC_SOURCE_DIR "/mjcf";
   std::string tables = "all";        // 12, 3 or all
   std::string derivatives = "matrix";  // matrix, adjoint or both
+  std::string shooting = "single";     // single, multiple or both
   double duration = 10.0;
   bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
@@ -40,13 +41,15 @@ constexpr const char* kArmsTable = "arms";
 constexpr double kReachTolerance = 1e-3;
 
 struct Cell {
-  std::string table, model, formulation, derivatives;  // arms: model is the task file's name
+  std::string table, model, formulation, derivatives, shooting;  // arms: model is the task file's name
   int n = 0, N = 0, kmax = 0;
   std::string settings;  // hash of everything else the cell runs with (the task as run)
   std::string key() const {
-    return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + std::to_string(N) +
+    return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" + std::to_string(N) +
            "|" + std::to_string(kmax) + "|" + settings;
   }
+  // the solver variant, as the tables label it
+  std::string variant() const { return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting"); }
 };
 
 // the hash of the task as the cell runs it, so that a resumed sweep never mixes settings
@@ -92,6 +95,7 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   }
   task.formulation = c.formulation;
   task.derivatives = c.derivatives;
+  task.shooting = c.shooting;
   task.N = c.N;
   task.kmax = c.kmax;
   if (!arm || opt.duration_given) task.duration = opt.duration;
@@ -120,12 +124,18 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables, const
 }
 
 std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables) {
-  std::vector<std::string> modes;
+  std::vector<std::string> modes, shootings;
   if (opt.derivatives == "both") {
     modes = {"matrix", "adjoint"};
   } else {
     parse_derivative_mode(opt.derivatives);
     modes = {opt.derivatives};
+  }
+  if (opt.shooting == "both") {
+    shootings = {"single", "multiple"};
+  } else {
+    parse_shooting(opt.shooting);
+    shootings = {opt.shooting};
   }
   if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && opt.tables != kArmsTable) {
     throw std::invalid_argument("--tables must be 12, 3, all or arms, got '" + opt.tables + "'");
@@ -133,24 +143,28 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables) {
   std::vector<Cell> cells;
   if (opt.tables == kArmsTable) {
     for (const auto& mode : modes) {
-      for (const std::string& file : arm_tasks(opt)) {
-        const Task t = load_task(in_models(opt, file));
-        for (const char* f : {"fd", "id"}) cells.push_back({kArmsTable, file, f, mode, 0, t.N, t.kmax, ""});
+      for (const auto& shooting : shootings) {
+        for (const std::string& file : arm_tasks(opt)) {
+          const Task t = load_task(in_models(opt, file));
+          for (const char* f : {"fd", "id"}) cells.push_back({kArmsTable, file, f, mode, shooting, 0, t.N, t.kmax, ""});
+        }
       }
     }
     return cells;
   }
   for (const auto& mode : modes) {
-    for (const PaperCell& p : tables.cells) {
-      if (opt.tables != "all" && p.table != opt.tables) continue;
-      cells.push_back({p.table, p.model, p.formulation, mode, p.n, p.N, p.kmax, ""});
+    for (const auto& shooting : shootings) {
+      for (const PaperCell& p : tables.cells) {
+        if (opt.tables != "all" && p.table != opt.tables) continue;
+        cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, ""});
+      }
     }
   }
   return cells;
 }
 
 const char* kCsvHeader =
-    "table,model,n,formulation,derivatives,N,kmax,Qa,diverged,diverged_at,mean_update_ms,"
+    "table,model,n,formulation,derivatives,shooting,N,kmax,Qa,diverged,diverged_at,mean_update_ms,"
     "p95_update_ms,final_q_error,final_v_norm,paper_ms,paper_note,steps,saturated_steps,"
     "max_constraint_violation,settings";
 
@@ -158,7 +172,7 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   const PaperFigure p = paper_figure(tables, r.cell);
   std::ostringstream o;
   o << std::setprecision(8) << r.cell.table << ',' << r.cell.model << ',' << r.cell.n << ','
-    << r.cell.formulation << ',' << r.cell.derivatives << ',' << r.cell.N << ',' << r.cell.kmax << ','
+    << r.cell.formulation << ',' << r.cell.derivatives << ',' << r.cell.shooting << ',' << r.cell.N << ',' << r.cell.kmax << ','
     << r.Qa << ',' << (r.diverged ? 1 : 0) << ',' << r.diverged_at << ',' << r.mean_ms << ','
     << r.p95_ms << ',' << r.final_q_error << ',' << r.final_v_norm << ',' << p.ms << ',' << p.note << ','
     << r.steps << ',' << r.saturated_steps << ',' << r.max_violation << ',' << r.cell.settings;
@@ -188,23 +202,23 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
     std::stringstream ss(line);
     std::string x;
     while (std::getline(ss, x, ',')) f.push_back(x);
-    if (f.size() != 20) continue;
+    if (f.size() != 21) continue;
     try {
       CellResult r;
-      r.cell = {f[0], f[1], f[3], f[4], std::stoi(f[2]), std::stoi(f[5]), std::stoi(f[6]), f[19]};
-      r.Qa = std::stod(f[7]);
-      r.diverged = f[8] == "1";
-      r.diverged_at = std::stod(f[9]);
-      r.mean_ms = std::stod(f[10]);
-      r.p95_ms = std::stod(f[11]);
-      r.final_q_error = std::stod(f[12]);
-      r.final_v_norm = std::stod(f[13]);
-      r.steps = std::stol(f[16]);
-      r.saturated_steps = std::stol(f[17]);
-      r.max_violation = std::stod(f[18]);
+      r.cell = {f[0], f[1], f[3], f[4], f[5], std::stoi(f[2]), std::stoi(f[6]), std::stoi(f[7]), f[20]};
+      r.Qa = std::stod(f[8]);
+      r.diverged = f[9] == "1";
+      r.diverged_at = std::stod(f[10]);
+      r.mean_ms = std::stod(f[11]);
+      r.p95_ms = std::stod(f[12]);
+      r.final_q_error = std::stod(f[13]);
+      r.final_v_norm = std::stod(f[14]);
+      r.steps = std::stol(f[17]);
+      r.saturated_steps = std::stol(f[18]);
+      r.max_violation = std::stod(f[19]);
       if (!keys.count(r.cell.key())) {
         throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
-                                    r.cell.formulation + " " + r.cell.derivatives + ": other duration, weights or "
+                                    r.cell.formulation + " " + r.cell.variant() + ": other duration, weights or "
                                     "task)" + what);
       }
       done[r.cell.key()] = r;
@@ -255,14 +269,15 @@ std::string arms_markdown(const std::vector<Cell>& cells, const std::map<std::st
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
   };
+  // modes: the solver variants (derivatives, shooting), as labelled
   std::vector<std::string> tasks, modes;
   for (const Cell& c : cells) {
     if (std::find(tasks.begin(), tasks.end(), c.model) == tasks.end()) tasks.push_back(c.model);
-    if (std::find(modes.begin(), modes.end(), c.derivatives) == modes.end()) modes.push_back(c.derivatives);
+    if (std::find(modes.begin(), modes.end(), c.variant()) == modes.end()) modes.push_back(c.variant());
   }
   auto cell_of = [&](const std::string& task, const std::string& f, const std::string& mode) -> const CellResult* {
     for (const Cell& c : cells) {
-      if (c.model == task && c.formulation == f && c.derivatives == mode) return find(c);
+      if (c.model == task && c.formulation == f && c.variant() == mode) return find(c);
     }
     return nullptr;
   };
@@ -326,14 +341,15 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
   };
+  // mode: a solver variant (derivatives, shooting) as Cell::variant labels it
   auto cell = [&](const std::string& table, const std::string& f, const std::string& mode, int n, int N, int kmax) {
     // the grid's cell (with its settings key), or an unkeyed one that finds nothing
     for (const Cell& c : cells) {
-      if (c.table == table && c.formulation == f && c.derivatives == mode && c.n == n && c.N == N && c.kmax == kmax) {
+      if (c.table == table && c.formulation == f && c.variant() == mode && c.n == n && c.N == N && c.kmax == kmax) {
         return c;
       }
     }
-    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, n, N, kmax, ""};
+    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, "", n, N, kmax, ""};
   };
   // ours (paper) for the ID/FD ratio of one grid point
   auto ratio = [&](const std::string& table, const std::string& mode, int n, int N, int kmax) {
@@ -348,9 +364,11 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
     << "`*` diverged (time averaged until divergence), `†` ID needed the fallback Q_a "
     << "(the paper's rule). The paper's figures are from " << tables.machine
     << ": compare ratios, not absolute times.\n";
-  for (const std::string mode : {"matrix", "adjoint"}) {
-    const bool any = std::any_of(cells.begin(), cells.end(), [&](const Cell& c) { return c.derivatives == mode; });
-    if (!any) continue;
+  std::vector<std::string> modes;
+  for (const Cell& c : cells) {
+    if (std::find(modes.begin(), modes.end(), c.variant()) == modes.end()) modes.push_back(c.variant());
+  }
+  for (const std::string& mode : modes) {
     if (opt.tables != "3") {
       const std::vector<int> Ns = axis(tables, "12", [](const PaperCell& p) { return p.N; });
       const std::vector<int> kmaxs = axis(tables, "12", [](const PaperCell& p) { return p.kmax; });
@@ -403,8 +421,9 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   const Task task = cell_task(base, c, opt);
   std::string log;
   if (opt.logs) {
-    log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.rfind('.')) + "_" +
-          c.formulation + "_" + c.derivatives + "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) + ".csv";
+    log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.rfind('.')) + "_" + c.formulation + "_" +
+          c.derivatives + (c.shooting == "single" ? "" : "_" + c.shooting) + "_N" + std::to_string(c.N) + "_k" +
+          std::to_string(c.kmax) + ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
   const RunSummary s = run_swingup(task, log, true).summary;
@@ -465,7 +484,7 @@ void run(const SweepOptions& opt) {
   for (const Cell& c : cells) {
     ++index;
     std::fprintf(stderr, "[%d/%zu] %s %s %s N=%d kmax=%d: ", index, cells.size(), c.model.c_str(),
-                 c.formulation == "fd" ? "FD" : "ID", c.derivatives.c_str(), c.N, c.kmax);
+                 c.formulation == "fd" ? "FD" : "ID", c.variant().c_str(), c.N, c.kmax);
     if (done.count(c.key())) {
       std::fprintf(stderr, "done earlier\n");
       continue;
@@ -498,6 +517,7 @@ void register_sweep(CLI::App& app) {
                   "mjcf/arms.json, written to arms.csv and arms.md)")
       ->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();
+  sub->add_option("--shooting", opt->shooting, "single, multiple or both (DESIGN §9)")->capture_default_str();
   CLI::Option* duration =
       sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")
           ->capture_default_str();

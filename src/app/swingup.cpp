@@ -35,6 +35,10 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_option("--init-full-horizon", t.init_full_horizon,
                      "true: solve the full-horizon problem at t = 0 before the loop (with --alpha 0)"),
       [](const Task& s, Task& d) { d.init_full_horizon = s.init_full_horizon; });
+  add(sub.add_option("--shooting", t.shooting,
+                     "single (rollout from the measured state) or multiple (states and costates as unknowns, "
+                     "condensed)"),
+      [](const Task& s, Task& d) { d.shooting = s.shooting; });
   add(sub.add_option("--duration", t.duration, "simulated time [s]"),
       [](const Task& s, Task& d) { d.duration = s.duration; });
   add(sub.add_option("--q0", t.q0, "initial joint positions, one per joint"), [](const Task& s, Task& d) {

@@ -370,7 +370,8 @@ const std::vector<BadInput>& bad_inputs() {
       {"--kmax 101", {"kmax", "101", "100"}},
       // a problem not strictly convex in its decision variable
       {"--formulation fd --R 0", {"--R", "positive with FD"}},
-      {"--R 0", {"--R and --Qa", "both 0"}}};
+      {"--R 0", {"--R and --Qa", "both 0"}},
+      {"--shooting double", {"shooting", "'double'", "single", "multiple"}}};
   return inputs;
 }
 
@@ -378,7 +379,7 @@ std::string bad_input_name(const ::testing::TestParamInfo<BadInput>& info) {
   static const std::vector<std::string> names = {"formulation", "derivatives", "N",  "kmax",      "dt",
                                                  "Qq",          "R",           "q0", "ball_joint",
                                                  "kmax_int_max", "kmax_above_dimension", "fd_R_zero",
-                                                 "id_R_and_Qa_zero"};
+                                                 "id_R_and_Qa_zero", "shooting"};
   return names.at(info.index);
 }
 
@@ -683,6 +684,49 @@ TEST_F(Cli, SweepRunsTheRealArmsTasks) {
   EXPECT_NE(md.find("| reach.json | 7 |"), std::string::npos) << md;
   EXPECT_NE(md.find("| reach.json | ID adjoint | no |"), std::string::npos) << md;  // 30 ms do not reach
   EXPECT_NE(md.find("steps with a clamped torque"), std::string::npos) << md;
+}
+
+// multiple shooting through the CLI: the run records its scheme, and it swings the arm like
+// single shooting does (the first 0.3 s of the swing-up, both formulations)
+TEST_F(Cli, SwingupRunsMultipleShootingAndRecordsIt) {
+  for (const char* f : {"fd", "id"}) {
+    SCOPED_TRACE(f);
+    std::vector<double> q_end[2];
+    for (const char* scheme : {"single", "multiple"}) {
+      const Result r = idmpc("swingup " + quote(kArm4) + " --formulation " + f + " --shooting " + scheme +
+                             " --duration 0.3 --log log.csv --summary s.json");
+      ASSERT_EQ(r.code, 0) << r.err;
+      const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
+      EXPECT_EQ(s["task"]["cgmres"]["shooting"], scheme);
+      EXPECT_EQ(s["diverged"], false);
+      const std::vector<std::string> f_last = split(lines_of(slurp(dir_ / "log.csv")).back());
+      for (int j = 1; j <= 4; ++j) q_end[std::string(scheme) == "multiple"].push_back(std::stod(f_last[j]));
+    }
+    // the arm has swung (q0 from −π by more than 0.3 rad), the same way under both schemes
+    EXPECT_GT(q_end[0][0] + M_PI, 0.3);
+    for (int j = 0; j < 4; ++j) EXPECT_NEAR(q_end[1][j], q_end[0][j], 0.05) << "joint " << j;
+  }
+}
+
+// the sweep's shooting axis: a column of its own, cells keyed by it, one table per scheme
+TEST_F(Cli, SweepHasAShootingAxis) {
+  const Result r = idmpc("sweep --tables 3 --shooting both --duration 0.02 --out sweep");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::vector<std::string> lines = lines_of(slurp(dir_ / "sweep" / "sweep.csv"));
+  ASSERT_EQ(lines.size(), 17u) << "header and 16 cells (n = 8 … 32 × FD, ID × single, multiple)";
+  const std::vector<std::string> header = split(lines[0]);
+  const size_t column = static_cast<size_t>(std::find(header.begin(), header.end(), "shooting") - header.begin());
+  ASSERT_LT(column, header.size());
+  int multiple = 0;
+  for (size_t k = 1; k < lines.size(); ++k) multiple += split(lines[k])[column] == "multiple";
+  EXPECT_EQ(multiple, 8);
+  const std::string md = slurp(dir_ / "sweep" / "sweep.md");
+  EXPECT_NE(md.find("## Table 3: N = 25, kmax = 10, derivatives: matrix\n"), std::string::npos) << md;
+  EXPECT_NE(md.find("## Table 3: N = 25, kmax = 10, derivatives: matrix, multiple shooting\n"), std::string::npos) << md;
+  // resumed: every cell, of either scheme, was done
+  const Result again = idmpc("sweep --tables 3 --shooting both --duration 0.02 --out sweep");
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(again.err.find("ms per update"), std::string::npos) << again.err;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 // The acceptance test: the paper's swing-up of the 4-link arm (DESIGN §7) closed-loop with the
 // MuJoCo plant, by C/GMRES on forward dynamics and on inverse dynamics, each with matrix and
-// adjoint derivatives. All four must swing up and hold; with Q_a = 0 the FD and ID controllers
+// adjoint derivatives, under single and under multiple shooting (DESIGN §9). All eight must
+// swing up and hold; with Q_a = 0 the FD and ID controllers
 // solve the same optimality conditions, so their torques must nearly coincide. Divergence is a
 // result, never an exception.
 #include <gtest/gtest.h>
@@ -39,6 +40,7 @@ constexpr double kFinalSpeed = 0.1;     // rad/s, ‖v‖
 struct Settings {
   Formulation formulation = Formulation::kInverseDynamics;
   DerivativeMode mode = DerivativeMode::kAdjoint;
+  ShootingScheme shooting = ShootingScheme::kSingle;
   int N = 25;
   int kmax = 10;
   double zeta = 0;  // 1/Δt
@@ -56,7 +58,7 @@ struct LoopRun {
 };
 
 std::string describe(const Settings& s) {
-  return to_string(s.formulation) + "/" + to_string(s.mode) + " N=" + std::to_string(s.N) +
+  return to_string(s.formulation) + "/" + to_string(s.mode) + "/" + to_string(s.shooting) + " N=" + std::to_string(s.N) +
          " kmax=" + std::to_string(s.kmax);
 }
 
@@ -74,6 +76,7 @@ class Loop {
     CgmresSettings cs = paper.cgmres;
     cs.kmax = settings.kmax;
     cs.zeta = settings.zeta;
+    cs.shooting = settings.shooting;
     controller_ = std::make_unique<Controller>(
         OcpProblem(model, settings.formulation, settings.mode, paper.weights, q_ref_, settings.N), cs);
     plant_ = std::make_unique<mj::Plant>(m_.get(), imported_.actuation);
@@ -141,7 +144,7 @@ double max_angle_difference(const LoopRun& a, const LoopRun& b) {
   return worst;
 }
 
-// the four paper-setting runs, once for the whole suite (each is 10 000 updates)
+// the eight paper-setting runs, once for the whole suite (each is 10 000 updates)
 class Swingup : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -150,10 +153,13 @@ class Swingup : public ::testing::Test {
     std::vector<std::unique_ptr<Loop>> loops;
     for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
       for (DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
-        Settings s;
-        s.formulation = f;
-        s.mode = d;
-        loops.push_back(std::make_unique<Loop>(s));
+        for (ShootingScheme sh : {ShootingScheme::kSingle, ShootingScheme::kMultiple}) {
+          Settings s;
+          s.formulation = f;
+          s.mode = d;
+          s.shooting = sh;
+          loops.push_back(std::make_unique<Loop>(s));
+        }
       }
     }
     mj::take_warnings();
@@ -163,7 +169,7 @@ class Swingup : public ::testing::Test {
     warnings_ = new std::vector<std::string>(mj::take_warnings());
     for (auto& loop : loops) {
       const Settings& s = loop->run().settings;
-      (*runs_)[key(s.formulation, s.mode)] = std::move(loop->run());
+      (*runs_)[key(s.formulation, s.mode, s.shooting)] = std::move(loop->run());
     }
   }
   static void TearDownTestSuite() {
@@ -172,8 +178,10 @@ class Swingup : public ::testing::Test {
     delete warnings_;
     warnings_ = nullptr;
   }
-  static std::string key(Formulation f, DerivativeMode d) { return to_string(f) + "/" + to_string(d); }
-  static const LoopRun& get(Formulation f, DerivativeMode d) { return runs_->at(key(f, d)); }
+  static std::string key(Formulation f, DerivativeMode d, ShootingScheme s) {
+    return to_string(f) + "/" + to_string(d) + "/" + to_string(s);
+  }
+  static const LoopRun& get(Formulation f, DerivativeMode d, ShootingScheme s) { return runs_->at(key(f, d, s)); }
 
   static std::map<std::string, LoopRun>* runs_;
   static std::vector<std::string>* warnings_;  // MuJoCo warnings raised during the runs
@@ -276,24 +284,38 @@ TEST_F(Swingup, PaperSettingsFdAndIdInBothDerivativeModes) {
     SCOPED_TRACE("one log row per control step");
     check_log_rows(*runs_);
   }
-  // the closed loop's own sensitivity to rounding: same formulation, F equal to rounding
-  Agreement floor{0, 0, 0, 0};
-  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
-    SCOPED_TRACE("matrix and adjoint runs of " + to_string(f) + " differ by rounding only");
-    const Agreement g = agreement(get(f, DerivativeMode::kAdjoint), get(f, DerivativeMode::kMatrix));
-    EXPECT_LE(g.whole, kSanityTorque);
-    EXPECT_LE(g.after, kSanityTorque);
-    EXPECT_LE(g.tracking, kAgreementTracking);
-    EXPECT_LE(g.angles, kSanityAngles);
-    floor = {std::max(floor.whole, g.whole), std::max(floor.after, g.after), 0, std::max(floor.angles, g.angles)};
+  for (ShootingScheme sh : {ShootingScheme::kSingle, ShootingScheme::kMultiple}) {
+    SCOPED_TRACE(to_string(sh) + " shooting");
+    // the closed loop's own sensitivity to rounding: same formulation, F equal to rounding
+    Agreement floor{0, 0, 0, 0};
+    for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+      SCOPED_TRACE("matrix and adjoint runs of " + to_string(f) + " differ by rounding only");
+      const Agreement g = agreement(get(f, DerivativeMode::kAdjoint, sh), get(f, DerivativeMode::kMatrix, sh));
+      EXPECT_LE(g.whole, kSanityTorque);
+      EXPECT_LE(g.after, kSanityTorque);
+      EXPECT_LE(g.tracking, kAgreementTracking);
+      EXPECT_LE(g.angles, kSanityAngles);
+      floor = {std::max(floor.whole, g.whole), std::max(floor.after, g.after), 0, std::max(floor.angles, g.angles)};
+    }
+    for (DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
+      SCOPED_TRACE("FD and ID torques agree");
+      const Agreement g =
+          agreement(get(Formulation::kInverseDynamics, d, sh), get(Formulation::kForwardDynamics, d, sh));
+      EXPECT_LE(g.whole, std::max(kAgreementWholeRun, 2 * floor.whole));
+      EXPECT_LE(g.after, std::max(kAgreementAfterTransient, 2 * floor.after));
+      EXPECT_LE(g.tracking, kAgreementTracking);
+      EXPECT_LE(g.angles, std::max(kAgreementAngles, 2 * floor.angles));
+    }
   }
-  for (DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
-    SCOPED_TRACE("FD and ID torques agree");
-    const Agreement g = agreement(get(Formulation::kInverseDynamics, d), get(Formulation::kForwardDynamics, d));
-    EXPECT_LE(g.whole, std::max(kAgreementWholeRun, 2 * floor.whole));
-    EXPECT_LE(g.after, std::max(kAgreementAfterTransient, 2 * floor.after));
-    EXPECT_LE(g.tracking, kAgreementTracking);
-    EXPECT_LE(g.angles, std::max(kAgreementAngles, 2 * floor.angles));
+  // both schemes track the same optimal solution: once the loop tracks closely, the same torques
+  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    for (DerivativeMode d : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
+      SCOPED_TRACE("single and multiple shooting agree");
+      const Agreement g = agreement(get(f, d, ShootingScheme::kMultiple), get(f, d, ShootingScheme::kSingle));
+      EXPECT_LE(g.whole, kSanityTorque);
+      EXPECT_LE(g.tracking, kAgreementTracking);
+      EXPECT_LE(g.angles, kSanityAngles);
+    }
   }
 }
 

@@ -170,7 +170,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   }
   if (r.has("cgmres")) {
     const Reader c = r.sub("cgmres");
-    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h", "init_full_horizon"});
+    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h", "init_full_horizon", "shooting"});
     c.get("N", t.N);
     c.get("kmax", t.kmax);
     c.get("Tf", t.Tf);
@@ -179,6 +179,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
     c.get("zeta", t.zeta);
     c.get("h", t.h);
     c.get("init_full_horizon", t.init_full_horizon);
+    c.get("shooting", t.shooting);
   }
   return t;
 }
@@ -208,7 +209,8 @@ nlohmann::json to_json(const Task& t) {
   if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
   j["weights"] = {{"Qq", t.Qq}, {"Qv", t.Qv}, {"Qa", t.Qa}, {"R", t.R}, {"Qa_fallback", t.Qa_fallback}};
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
-                 {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon}};
+                 {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon},
+                 {"shooting", t.shooting}};
   return j;
 }
 
@@ -276,6 +278,7 @@ ResolvedTask resolve(const Task& t, int n) {
   r.cgmres.zeta = t.zeta;
   r.cgmres.h = t.h;
   r.cgmres.init_full_horizon = t.init_full_horizon;
+  r.cgmres.shooting = parse_shooting(t.shooting);
   r.cgmres.validate();
   if (t.implicit_damping && t.alpha != 0) {
     throw std::invalid_argument("--implicit-damping (implicit_damping) needs a fixed horizon, alpha = 0 (its step is "

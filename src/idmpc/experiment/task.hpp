@@ -22,7 +22,8 @@
 ///                  an ID run that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
-///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize)}
+///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
+///                  "shooting": "single" or "multiple" (DESIGN §9)}
 
 #include <string>
 #include <vector>
@@ -54,6 +55,7 @@ struct Task {
   int N = 0, kmax = 0;
   double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
   bool init_full_horizon = false;
+  std::string shooting;  ///< "single" or "multiple"
 };
 
 /// @brief The paper's swing-up task file shipped with the sources (mjcf/paper_swingup.json).
