@@ -16,6 +16,8 @@
 //   Tables 1–2 (arm4: N ∈ {10,15,25,50} × kmax ∈ {3,5,10}),
 //   Table 3 and the size scaling (n ∈ {4,8,16,24,32,48,64}, N = 25, kmax = 10),
 //   the horizon scaling (n ∈ {4,16}, N ∈ {10,15,25,50,75,100}, kmax = 10);
+// BM_Update/<fd|id>_<matrix|adjoint>_multiple/…: the same controllers under multiple shooting
+//   (DESIGN §9), on Tables 1–3 and n ≤ 32;
 // BM_Residual/<controller>/n:<n>/N:25 times one F evaluation on the same states and solutions;
 // BM_StageVectorOps/n:<n> times the vector work of one ID stage without its dynamics calls.
 
@@ -47,8 +49,10 @@ struct Controller {
   Formulation formulation;
   DerivativeMode mode;
   bool simd_stages = true;  ///< ID + adjoint: horizon stages in SIMD lanes (the default)
+  ShootingScheme shooting = ShootingScheme::kSingle;
   std::string name() const {
-    return to_string(formulation) + "_" + to_string(mode) + (simd_stages ? "" : "_scalar");
+    return to_string(formulation) + "_" + to_string(mode) + (simd_stages ? "" : "_scalar") +
+           (shooting == ShootingScheme::kSingle ? "" : "_" + to_string(shooting));
   }
 };
 
@@ -59,6 +63,11 @@ const Controller kControllers[] = {
     {Formulation::kInverseDynamics, DerivativeMode::kAdjoint},
     // what the SIMD stage lanes buy: the same controller stage by stage (N = 25, kmax = 10 only)
     {Formulation::kInverseDynamics, DerivativeMode::kAdjoint, false},
+    // multiple shooting (Tables 1–3 and n ≤ 32 only)
+    {Formulation::kForwardDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kMultiple},
+    {Formulation::kForwardDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kMultiple},
+    {Formulation::kInverseDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kMultiple},
+    {Formulation::kInverseDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kMultiple},
 };
 
 struct Case {
@@ -66,7 +75,7 @@ struct Case {
   int n, N, kmax;
   auto key() const {
     return std::make_tuple(static_cast<int>(controller.formulation), static_cast<int>(controller.mode),
-                           controller.simd_stages, n, N, kmax);
+                           controller.simd_stages, static_cast<int>(controller.shooting), n, N, kmax);
   }
 };
 
@@ -103,7 +112,8 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   f.ocp = std::make_unique<Shooting>(f.bm->model(), c.controller.formulation, c.controller.mode,
                                            paper.weights, paper.qref, c.N);
   f.ocp->set_stage_batching(c.controller.simd_stages);
-  const CgmresSettings& settings = paper.cgmres;
+  CgmresSettings settings = paper.cgmres;
+  settings.shooting = c.controller.shooting;
   f.start = std::make_unique<Cgmres>(*f.ocp, settings);
   f.start->initialize(0.0, q0, v0);
 
@@ -274,7 +284,12 @@ void register_all() {
   auto add = [&](int n, int N, int kmax) {
     if (seen.insert({n, N, kmax}).second) cases.emplace_back(n, N, kmax);
   };
-  for (const PaperCell& p : load_paper_tables().cells) add(p.n, p.N, p.kmax);  // Tables 1–3
+  std::set<std::tuple<int, int, int>> paper;  // Tables 1–3 and n ≤ 32 at N = 25, kmax = 10
+  for (const PaperCell& p : load_paper_tables().cells) {
+    add(p.n, p.N, p.kmax);  // Tables 1–3
+    paper.insert({p.n, p.N, p.kmax});
+  }
+  for (int n : {4, 8, 16, 24, 32}) paper.insert({n, 25, 10});
   for (int n : {4, 8, 16, 24, 32, 48, 64}) add(n, 25, 10);  // Table 3 and size scaling
   for (int n : {4, 16}) {
     for (int N : {10, 15, 25, 50, 75, 100}) add(n, N, 10);  // horizon scaling
@@ -283,12 +298,13 @@ void register_all() {
   for (const auto& [n, N, kmax] : cases) {
     for (const Controller& ctrl : kControllers) {
       if (!ctrl.simd_stages && !(N == 25 && kmax == 10)) continue;
+      if (ctrl.shooting == ShootingScheme::kMultiple && !paper.count({n, N, kmax})) continue;
       const Case c{ctrl, n, N, kmax};
       const std::string tag = ctrl.name() + "/n:" + std::to_string(n) + "/N:" + std::to_string(N);
       benchmark::RegisterBenchmark(("BM_Update/" + tag + "/kmax:" + std::to_string(kmax)).c_str(),
                                    BM_Update, c)
           ->Unit(benchmark::kMicrosecond);
-      if (N == 25 && kmax == 10) {  // same fixture: registered right after its update case
+      if (N == 25 && kmax == 10 && ctrl.shooting == ShootingScheme::kSingle) {  // same fixture, right after
         benchmark::RegisterBenchmark(("BM_Residual/" + tag).c_str(), BM_Residual, c)
             ->Unit(benchmark::kMicrosecond);
       }

@@ -288,6 +288,73 @@ def table_3(updates):
             "`*`/`+` as above. Paper figures: matrix mode, their machine.\n\n" + table(hdr, rows) + "\n")
 
 
+SHOOTINGS = [("single", ""), ("multiple", "_multiple")]
+BASE_CONTROLLERS = ["fd_matrix", "fd_adjoint", "id_matrix", "id_adjoint"]
+
+
+def best(updates, f, suffix, key):
+    """Fastest of formulation f's variants (matrix/adjoint, SIMD stages on) under one shooting scheme
+    whose recorded swing-up did not diverge: (ms, variant) or (None, None)."""
+    found = (None, None)
+    for mode in MODES:
+        b = updates.get((f"{f}_{mode}{suffix}", *key))
+        t = ms(b)
+        if t is None or b.get("diverged", 0) > 0:
+            continue
+        if found[0] is None or t < found[0]:
+            found = (t, mode)
+    return found
+
+
+def shooting_tables(updates):
+    """Single vs multiple shooting per variant, and each formulation's best variant side by side."""
+    if not any(k[0].endswith("_multiple") for k in updates):
+        return ""
+    out = ["## Single vs multiple shooting (DESIGN §9), and best with best\n",
+           "Multiple shooting: states and costates as unknowns, condensed so that GMRES runs on the inputs "
+           "(one F evaluation more per update). `*`/`+` as above. *Best*: the fastest of a formulation's "
+           "variants (matrix or adjoint derivatives) whose recorded swing-up did not diverge.\n"]
+    ns = sorted({k[1] for k in updates if k[0].endswith("_multiple") and k[2] == 25 and k[3] == 10})
+    rows = []
+    for n in ns:
+        key = (n, 25, 10)
+        row = [n]
+        for c in BASE_CONTROLLERS:
+            for _, suffix in SHOOTINGS:
+                b = updates.get((c + suffix, *key))
+                row.append(f"{fmt(ms(b))}{mark(b)}")
+        bests = {}
+        for name, suffix in SHOOTINGS:
+            for f in ("fd", "id"):
+                bests[(f, name)] = best(updates, f, suffix, key)
+        for name, _ in SHOOTINGS:
+            fd, idt = bests[("fd", name)][0], bests[("id", name)][0]
+            row.append(fmt_ratio(idt / fd) if fd and idt else "–")
+        overall = {f: min((bests[(f, nm)] for nm, _ in SHOOTINGS if bests[(f, nm)][0] is not None),
+                          default=(None, None)) for f in ("fd", "id")}
+        fd, idt = overall["fd"][0], overall["id"][0]
+        row.append(fmt_ratio(idt / fd) if fd and idt else "–")
+        rows.append(row)
+    hdr = ["n"] + [f"{c} {name}" for c in BASE_CONTROLLERS for name, _ in SHOOTINGS] + \
+          ["best ID/best FD single", "best ID/best FD multiple", "best ID/best FD overall"]
+    out.append("### Chains, N = 25, kmax = 10, ms per update\n")
+    out.append(table(hdr, rows) + "\n")
+    rows = []
+    for kmax in T12_KMAX:
+        row = [f"kmax={kmax}"]
+        for N in T12_N:
+            key = (4, N, kmax)
+            cells = []
+            for name, suffix in SHOOTINGS:
+                fd, idt = best(updates, "fd", suffix, key)[0], best(updates, "id", suffix, key)[0]
+                cells.append(fmt_ratio(idt / fd) if fd and idt else "–")
+            row.append(" / ".join(cells))
+        rows.append(row)
+    out.append("### arm4 (Tables 1–2 grid): best ID / best FD, single / multiple shooting\n")
+    out.append(table(["", *[f"N={N}" for N in T12_N]], rows) + "\n")
+    return "\n".join(out)
+
+
 def scaling_tables(updates, residuals):
     ns = sorted({k[1] for k in updates if k[2] == 25 and k[3] == 10})
     rows = []
@@ -564,6 +631,7 @@ def main():
              targets_section(dyn, updates, stage_ops),
              tables_12(updates),
              table_3(updates),
+             shooting_tables(updates),
              scaling_tables(updates, residuals),
              dynamics_tables(dyn)]
     if errors:
