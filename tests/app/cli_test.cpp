@@ -723,6 +723,9 @@ TEST_F(Cli, SweepHasAShootingAxis) {
   const std::string md = slurp(dir_ / "sweep" / "sweep.md");
   EXPECT_NE(md.find("## Table 3: N = 25, kmax = 10, derivatives: matrix\n"), std::string::npos) << md;
   EXPECT_NE(md.find("## Table 3: N = 25, kmax = 10, derivatives: matrix, multiple shooting\n"), std::string::npos) << md;
+  // each formulation's fastest variant that did not diverge, side by side
+  EXPECT_NE(md.find("## Best with best: ID/FD of each formulation's fastest variant"), std::string::npos) << md;
+  EXPECT_NE(md.find("| best ID / best FD |"), std::string::npos) << md;
   // resumed: every cell, of either scheme, was done
   const Result again = idmpc("sweep --tables 3 --shooting both --duration 0.02 --out sweep");
   ASSERT_EQ(again.code, 0) << again.err;
