@@ -146,6 +146,9 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
   const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");
   EXPECT_EQ(to_json(back).dump(), to_json(s).dump());
   EXPECT_EQ(back.label(), "C/GMRES (FD, adjoint) N=25 kmax=10");
+  RunSummary multiple = back;
+  multiple.task.shooting = "multiple";
+  EXPECT_EQ(multiple.label(), "C/GMRES (FD, adjoint, multiple shooting) N=25 kmax=10");
   EXPECT_TRUE(std::isnan(back.p50_update_ms));
   EXPECT_EQ(back.torque_upper, s.torque_upper);  // unbounded joints survive as null
   EXPECT_EQ(back.max_constraint_violation, 0.25);

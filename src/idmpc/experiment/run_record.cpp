@@ -241,8 +241,8 @@ std::string RunSummary::label() const {
   std::string upper = task.formulation;
   std::transform(upper.begin(), upper.end(), upper.begin(),
                  [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
-  return "C/GMRES (" + upper + ", " + task.derivatives + ") N=" + std::to_string(task.N) +
-         " kmax=" + std::to_string(task.kmax);
+  return "C/GMRES (" + upper + ", " + task.derivatives + (task.shooting == "multiple" ? ", multiple shooting" : "") +
+         ") N=" + std::to_string(task.N) + " kmax=" + std::to_string(task.kmax);
 }
 
 namespace {
