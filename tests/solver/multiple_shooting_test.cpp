@@ -125,6 +125,40 @@ TEST_P(MultipleShooting, TheCondensedSweepRetrievesStoredTrajectoriesFromTheirDe
   EXPECT_LE((Fc - F).norm(), 100 * kRounding * std::max(1.0, F.norm()));
 }
 
+// At stored trajectories every stage is independent; with adjoints both formulations evaluate
+// them in SIMD lanes (FD: the whole stage, at the stored costates). N = 7 leaves a padded group.
+TEST_P(MultipleShooting, TheResidualAtStoredTrajectoriesIsTheSameInLanesAndStageByStage) {
+  const auto& [formulation, mode, limited] = GetParam();
+  const int N = 7;
+  Shooting lanes = make(N), single = make(N);
+  single.set_stage_batching(false);
+  EXPECT_EQ(lanes.problem().costate_lanes(),
+            formulation == Formulation::kForwardDynamics && mode == DerivativeMode::kAdjoint);
+  EXPECT_EQ(lanes.stage_batching(),
+            formulation == Formulation::kInverseDynamics && mode == DerivativeMode::kAdjoint);
+  EXPECT_FALSE(single.problem().costate_lanes() || single.stage_batching());
+  std::mt19937 rng(13);
+  const VecX<double> U = random_U(lanes, rng);
+  VecX<double> F(lanes.dim()), F1(lanes.dim()), F2(lanes.dim());
+  single.residual(U, kQ, kV, 0.3, F);
+  ShootingTrajectory X = single.trajectory();
+  for (MatX<double>* x : {&X.q, &X.v, &X.lmd, &X.gmm}) {
+    x->rightCols(N) += 0.2 * MatX<double>::NullaryExpr(4, N, [&] { return random_vector(rng, 1, 1.0)[0]; });
+  }
+  ShootingDefects E1, E2;
+  E1.resize(4, N);
+  E2.resize(4, N);
+  lanes.residual_at(U, X, kQ, kV, 0.3, F1, E1);
+  single.residual_at(U, X, kQ, kV, 0.3, F2, E2);
+  EXPECT_LE((F1 - F2).norm(), kRounding * std::max(1.0, F2.norm()));
+  EXPECT_LE(std::sqrt(ShootingDefects{E1.q - E2.q, E1.v - E2.v, E1.lmd - E2.lmd, E1.gmm - E2.gmm}.squared_norm()),
+            kRounding * scale(X));
+  // and the products do not outlive the evaluation: single shooting after it is unchanged
+  VecX<double> F3(lanes.dim());
+  lanes.residual(U, kQ, kV, 0.3, F3);
+  EXPECT_LE((F3 - F).norm(), kRounding * std::max(1.0, F.norm()));
+}
+
 // The uncondensed continuation system: unknowns Z = (U, q_1…q_N, v_1…v_N, λ_1…λ_N, γ_1…γ_N),
 // residual R = (F_U, defects), J Ż = −ζR − (∂R/∂x)ẋ − ∂R/∂t. The condensed update's (U̇, Ẋ)
 // must solve it.

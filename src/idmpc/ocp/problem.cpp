@@ -50,6 +50,7 @@ OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMo
   cost_.set_torque_reference(rnea(model_, stage_[0], cost_.q_ref(), zero, zero));
   for (MatX<double>* x : {&gq_all_, &gv_all_, &Mw_all_}) *x = MatX<double>::Zero(n, N);
   lanes_ = lanes_possible();
+  costate_lanes_ = costate_lanes_possible();
 }
 
 void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
@@ -64,6 +65,42 @@ void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
     rnea_derivatives(model_, d, q, v, input);
     output = d.tau;
   }
+}
+
+// a = FD(q, v, u), μ = M⁻¹γ_{i+1}, (∂ID/∂q)ᵀμ and (∂ID/∂v)ᵀμ for up to kStageLanes stages per
+// ABA; unused lanes repeat the last stage
+void OcpProblem::stage_lanes_at_costates(int i0, int count, const MatX<double>& q, const MatX<double>& v,
+                                         const MatX<double>& u, const MatX<double>& gmm, MatX<double>& a) {
+  assert(costate_lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
+  const int n = model_.n;
+  for (int k = 0; k < kStageLanes; ++k) {
+    const int i = i0 + std::min(k, count - 1);
+    for (int j = 0; j < n; ++j) {
+      ql_[j][k] = q(j, i);
+      vl_[j][k] = v(j, i);
+      al_[j][k] = u(j, i);       // the torque, in the acceleration's buffer
+      wl_[j][k] = gmm(j, i + 1);  // γ_{i+1}
+    }
+  }
+  const VecX<StagePack>& qdd = aba(model_, lane_data_, ql_, vl_, al_);
+  for (int k = 0; k < count; ++k) {
+    for (int j = 0; j < n; ++j) a(j, i0 + k) = qdd[j][k];
+  }
+  // μ = M⁻¹γ by the ABA factorization, then the RNEA part of the stage and its adjoint at μ
+  const VecX<StagePack>& mu = minv_apply(model_, lane_data_, wl_);
+  for (int k = 0; k < count; ++k) {
+    for (int j = 0; j < n; ++j) Mw_all_(j, i0 + k) = mu[j][k];
+  }
+  al_ = mu;  // rnea_vjp reads its weights while it overwrites data: a copy
+  rnea_after_aba(model_, lane_data_, ql_, vl_);
+  rnea_vjp(model_, lane_data_, al_);
+  for (int k = 0; k < count; ++k) {
+    for (int j = 0; j < n; ++j) {
+      gq_all_(j, i0 + k) = lane_data_.g_q[j][k];
+      gv_all_(j, i0 + k) = lane_data_.g_v[j][k];
+    }
+  }
+  costate_products_ = true;
 }
 
 // u = ID(q, v, a) and (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w with w = ∂(L + ρᵀ(s∘c))/∂u, for up to kStageLanes stages
@@ -141,7 +178,12 @@ void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In d, In rho, 
   } else {
     // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = w + μ
     torque_gradient();
-    if (mode_ == DerivativeMode::kAdjoint || !state) {
+    if (costate_products_) {
+      // from stage_lanes_at_costates, at these costates
+      hu = w_ + Mw_all_.col(i);
+      gq_ = -gq_all_.col(i);
+      gv_ = -gv_all_.col(i);
+    } else if (mode_ == DerivativeMode::kAdjoint || !state) {
       const VecX<double>& mu = minv_apply(model_, data, gmm_next);  // ABA factorization of stage i
       hu = w_ + mu;
       if (state) {

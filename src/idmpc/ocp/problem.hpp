@@ -73,8 +73,29 @@ class OcpProblem {
   bool lanes_possible() const {
     return formulation_ == Formulation::kInverseDynamics && mode_ == DerivativeMode::kAdjoint;
   }
-  void set_stages_in_lanes(bool on) { lanes_ = on && lanes_possible(); }
+  void set_stages_in_lanes(bool on) {
+    lanes_ = on && lanes_possible();
+    costate_lanes_ = on && costate_lanes_possible();
+  }
   bool stages_in_lanes() const { return lanes_; }
+
+  /// @brief FD with adjoints, when the costates are given (multiple shooting's residual at stored
+  /// trajectories): then the whole stage — a = FD(q, v, u), μ = M⁻¹γ_{i+1} and the products
+  /// (∂ID/∂q)ᵀμ, (∂ID/∂v)ᵀμ — is independent of the other stages, and kStageLanes of them run at
+  /// once (stage_lanes_at_costates). On by default, off with set_stages_in_lanes(false).
+  bool costate_lanes_possible() const {
+    return formulation_ == Formulation::kForwardDynamics && mode_ == DerivativeMode::kAdjoint;
+  }
+  bool costate_lanes() const { return costate_lanes_; }
+
+  /// @brief Stages i0 … i0 + count − 1 (count ≤ kStageLanes) at given costates: columns of q, v
+  /// and the torques u (n × N) in, γ_{i+1} from column i + 1 of gmm (n × (N+1)); the
+  /// accelerations a (n × N) out. The products are kept for the stage_hamiltonian calls that
+  /// follow, at these same costates, until release_costate_lanes().
+  void stage_lanes_at_costates(int i0, int count, const MatX<double>& q, const MatX<double>& v,
+                               const MatX<double>& u, const MatX<double>& gmm, MatX<double>& a);
+  /// @brief stage_hamiltonian computes its products again (after stage_lanes_at_costates).
+  void release_costate_lanes() { costate_products_ = false; }
 
   /// @brief Stages i0 … i0 + count − 1 (count ≤ kStageLanes) at once: columns of q, v, a (n × N)
   /// and of the multipliers rho (m × N) in, u (n × N) out; the products of each stage are kept
@@ -103,6 +124,8 @@ class OcpProblem {
   TorqueBounds bounds_;
   int N_;
   bool lanes_ = false;
+  bool costate_lanes_ = false;
+  bool costate_products_ = false;  ///< gq_all_, gv_all_, Mw_all_ (= μ) hold stage_lanes_at_costates' products
 
   std::vector<Data> stage_;                 ///< one dynamics workspace per stage
   DataTpl<StagePack> lane_data_;            ///< workspace of the stages in lanes

@@ -145,13 +145,23 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   const double dtau = T / N;
   const auto t0 = timing_ ? clock::now() : clock::time_point{};
 
-  // every stage at its stored state: the stages are independent
+  // every stage at its stored state: the stages are independent (FD with adjoints: at the stored
+  // costates too, so the whole stage runs in lanes)
   x_.q = at.q;
   x_.v = at.v;
   x_.q.col(0) = q0;
   x_.v.col(0) = v0;
+  x_.lmd = at.lmd;
+  x_.gmm = at.gmm;
   unpack(U, N);
-  stage_dynamics(N);
+  const bool costate_lanes = problem_.costate_lanes();
+  if (costate_lanes) {
+    for (int i0 = 0; i0 < N; i0 += kStageLanes) {
+      problem_.stage_lanes_at_costates(i0, std::min(kStageLanes, N - i0), x_.q, x_.v, u_, x_.gmm, a_);
+    }
+  } else {
+    stage_dynamics(N);
+  }
   const auto& q = x_.q;
   const auto& v = x_.v;
   e.q.col(N).setZero();
@@ -163,8 +173,6 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   const auto t1 = timing_ ? clock::now() : t0;
 
   // every stage's Hamiltonian at the stored costates of the next stage
-  x_.lmd = at.lmd;
-  x_.gmm = at.gmm;
   problem_.terminal_costate(q.col(N), v.col(N), phi_q_, phi_v_);
   e.lmd.col(N) = x_.lmd.col(N) - phi_q_;
   e.gmm.col(N) = x_.gmm.col(N) - phi_v_;
@@ -178,6 +186,7 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
     e.lmd.col(i) = x_.lmd.col(i) - x_.lmd.col(i + 1) - dtau * hq_;
     e.gmm.col(i) = x_.gmm.col(i) - x_.gmm.col(i + 1) - dtau * hv_;
   }
+  if (costate_lanes) problem_.release_costate_lanes();
   if (timing_) {
     times_.rollout += std::chrono::duration<double>(t1 - t0).count();
     times_.costate += std::chrono::duration<double>(clock::now() - t1).count();

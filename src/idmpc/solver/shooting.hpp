@@ -85,7 +85,8 @@ class Shooting {
 
   /// @brief Multiple shooting: F_U (size dim) and the defects of the stored states and costates
   /// `at` (columns 1 … N) with x_0 = (q0, v0) measured, horizon T. Every stage is evaluated at
-  /// its stored state, independently of the others (ID with adjoints: in SIMD lanes). Fills
+  /// its stored state, independently of the others (in SIMD lanes: ID with adjoints, and FD with
+  /// adjoints, whose stages are independent here at the stored costates too). Fills
   /// trajectory() with `at`. With zero defects, F equals residual(U, q0, v0, T).
   void residual_at(In U, const ShootingTrajectory& at, In q0, In v0, double T, Eigen::Ref<Vec> F,
                    ShootingDefects& defects);
