@@ -65,7 +65,8 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
                    "damped arms"),
       [](const Task& s, Task& d) { d.implicit_damping = s.implicit_damping; });
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
-                   "ID + adjoint: evaluate the horizon stages one by one instead of in SIMD lanes"),
+                   "evaluate the horizon stages one by one instead of in SIMD lanes (ID + adjoint; FD + "
+                   "adjoint under multiple shooting)"),
       [](const Task& s, Task& d) { d.simd_stages = s.simd_stages; });
 }
 
@@ -136,7 +137,8 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   RunSummary s;
   s.task = task;
   s.n = n;
-  s.simd_stages = controller.nlp().stage_batching();
+  s.simd_stages = controller.nlp().stage_batching() ||
+                  (controller.problem().costate_lanes() && r.cgmres.shooting == ShootingScheme::kMultiple);
   s.zeta = controller.solver().settings().zeta;
   s.steps = result.steps;
   s.diverged = result.diverged;
