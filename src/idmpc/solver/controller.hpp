@@ -1,6 +1,6 @@
 #pragma once
 /// @file controller.hpp
-/// @brief The NMPC controller of the paper's closed loop: the problem, its single-shooting
+/// @brief The NMPC controller of the paper's closed loop: the problem, its shooting
 /// residual, the C/GMRES solver and the torque rule of eqs. 27–28, in one place.
 ///
 /// Timing (DESIGN §6): the update made at time t from the measured x(t) yields the torque
