@@ -263,17 +263,25 @@ const PaperCell& paper_cell(const PaperTables& tables, const std::string& table,
   throw std::logic_error("no paper cell for table " + table);
 }
 
+// the solver variants of a grid (Cell::variant: derivatives, shooting), in the grid's order
+std::vector<std::string> variants(const std::vector<Cell>& cells) {
+  std::vector<std::string> out;
+  for (const Cell& c : cells) {
+    if (std::find(out.begin(), out.end(), c.variant()) == out.end()) out.push_back(c.variant());
+  }
+  return out;
+}
+
 // the real-arm tables: time per update with ID/FD, then each run's outcome
 std::string arms_markdown(const std::vector<Cell>& cells, const std::map<std::string, CellResult>& done) {
   auto find = [&](const Cell& c) -> const CellResult* {
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
   };
-  // modes: the solver variants (derivatives, shooting), as labelled
-  std::vector<std::string> tasks, modes;
+  const std::vector<std::string> modes = variants(cells);
+  std::vector<std::string> tasks;
   for (const Cell& c : cells) {
     if (std::find(tasks.begin(), tasks.end(), c.model) == tasks.end()) tasks.push_back(c.model);
-    if (std::find(modes.begin(), modes.end(), c.variant()) == modes.end()) modes.push_back(c.variant());
   }
   auto cell_of = [&](const std::string& task, const std::string& f, const std::string& mode) -> const CellResult* {
     for (const Cell& c : cells) {
@@ -364,10 +372,7 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
     << "`*` diverged (time averaged until divergence), `†` ID needed the fallback Q_a "
     << "(the paper's rule). The paper's figures are from " << tables.machine
     << ": compare ratios, not absolute times.\n";
-  std::vector<std::string> modes;
-  for (const Cell& c : cells) {
-    if (std::find(modes.begin(), modes.end(), c.variant()) == modes.end()) modes.push_back(c.variant());
-  }
+  const std::vector<std::string> modes = variants(cells);
   for (const std::string& mode : modes) {
     if (opt.tables != "3") {
       const std::vector<int> Ns = axis(tables, "12", [](const PaperCell& p) { return p.N; });

@@ -84,6 +84,15 @@ const VecX<double> kV = (VecX<double>(4) << 2.0, -1.0, 0.5, 0.3).finished();
 
 double scale(const ShootingTrajectory& x) { return std::max(1.0, x.max_abs()); }
 
+// the unknown columns 1 … N of every stored trajectory moved by up to ±size: nonzero defects
+ShootingTrajectory perturbed(ShootingTrajectory X, double size, std::mt19937& rng) {
+  for (MatX<double>* x : {&X.q, &X.v, &X.lmd, &X.gmm}) {
+    const Eigen::Index N = x->cols() - 1;
+    x->rightCols(N) += MatX<double>::NullaryExpr(x->rows(), N, [&] { return random_vector(rng, 1, size)[0]; });
+  }
+  return X;
+}
+
 TEST_P(MultipleShooting, AtTheRolloutTheResidualIsSingleShootingsWithZeroDefects) {
   const int N = 6;
   Shooting ocp = make(N);
@@ -107,10 +116,7 @@ TEST_P(MultipleShooting, TheCondensedSweepRetrievesStoredTrajectoriesFromTheirDe
   VecX<double> F(ocp.dim()), Fc(ocp.dim());
   ocp.residual(U, kQ, kV, 0.3, F);
   // stored trajectories well away from the rollout
-  ShootingTrajectory X = ocp.trajectory();
-  for (MatX<double>* x : {&X.q, &X.v, &X.lmd, &X.gmm}) {
-    x->rightCols(N) += 0.3 * MatX<double>::NullaryExpr(4, N, [&] { return random_vector(rng, 1, 1.0)[0]; });
-  }
+  const ShootingTrajectory X = perturbed(ocp.trajectory(), 0.3, rng);
   ShootingDefects E;
   E.resize(4, N);
   ocp.residual_at(U, X, kQ, kV, 0.3, F, E);
@@ -141,10 +147,7 @@ TEST_P(MultipleShooting, TheResidualAtStoredTrajectoriesIsTheSameInLanesAndStage
   const VecX<double> U = random_U(lanes, rng);
   VecX<double> F(lanes.dim()), F1(lanes.dim()), F2(lanes.dim());
   single.residual(U, kQ, kV, 0.3, F);
-  ShootingTrajectory X = single.trajectory();
-  for (MatX<double>* x : {&X.q, &X.v, &X.lmd, &X.gmm}) {
-    x->rightCols(N) += 0.2 * MatX<double>::NullaryExpr(4, N, [&] { return random_vector(rng, 1, 1.0)[0]; });
-  }
+  const ShootingTrajectory X = perturbed(single.trajectory(), 0.2, rng);
   ShootingDefects E1, E2;
   E1.resize(4, N);
   E2.resize(4, N);
@@ -176,10 +179,7 @@ TEST_P(MultipleShooting, TheCondensedDirectionSolvesTheUncondensedSystem) {
   solver.initialize(t, kQ, kV);
   // perturbed stored trajectories: nonzero defects
   std::mt19937 rng(3);
-  ShootingTrajectory X = solver.trajectory();
-  for (MatX<double>* x : {&X.q, &X.v, &X.lmd, &X.gmm}) {
-    x->rightCols(N) += 0.05 * MatX<double>::NullaryExpr(n, N, [&] { return random_vector(rng, 1, 1.0)[0]; });
-  }
+  const ShootingTrajectory X = perturbed(solver.trajectory(), 0.05, rng);
   solver.set_trajectory(X);
   VecX<double> U = solver.solution();
   if (limited) {

@@ -84,7 +84,6 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
 
   // forward sweep: explicit Euler from the measured state (eq. 12), plus the defects
   const bool fd = problem_.formulation() == Formulation::kForwardDynamics;
-  const bool lanes = problem_.stages_in_lanes();
   unpack(U, stages);
   auto& q = x_.q;
   auto& v = x_.v;
@@ -100,13 +99,7 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
     }
   }
   // the ID rollout does not depend on u: the stages' dynamics afterwards (in lanes if enabled)
-  if (!fd) {
-    if (lanes) {
-      stage_dynamics(stages);
-    } else {
-      for (int i = 0; i < stages; ++i) problem_.stage_dynamics(i, q.col(i), v.col(i), a_.col(i), u_.col(i));
-    }
-  }
+  if (!fd) stage_dynamics(stages);
   const auto t1 = timing_ ? clock::now() : t0;
 
   // terminal costates (eqs. 16, 18), then the backward sweep (eqs. 22–24); λ_0, γ_0 are
