@@ -1,0 +1,125 @@
+// A C/GMRES update allocates no heap memory once the controller exists: every variant (FD/ID ×
+// matrix/adjoint × single/multiple shooting, with and without torque limits) is a hot path.
+//
+// The solver is compiled without Eigen's runtime allocation check, so this test counts calls to
+// malloc itself: the executable defines malloc, calloc and realloc over glibc's own entry points,
+// which takes precedence over libc's. Under AddressSanitizer, whose runtime owns malloc, the count
+// is not available and the test skips.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <tuple>
+
+#include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/shooting.hpp"
+#include "support/problems.hpp"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define IDMPC_COUNT_MALLOC 0
+#else
+#define IDMPC_COUNT_MALLOC 1
+#endif
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+void count() {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
+#if IDMPC_COUNT_MALLOC
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* malloc(std::size_t size) {
+  count();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  count();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) {
+  count();
+  return __libc_realloc(p, size);
+}
+}
+#endif
+
+namespace idmpc {
+namespace {
+
+using test::load_problem;
+using test::paper_weights;
+using test::Problem;
+
+// allocations counted over the guard's lifetime
+class CountAllocations {
+ public:
+  CountAllocations() {
+    g_allocations = 0;
+    g_counting = true;
+  }
+  ~CountAllocations() { g_counting = false; }
+  long count() const { return g_allocations.load(); }
+};
+
+TEST(NoMallocCounter, IsArmed) {
+  if (!IDMPC_COUNT_MALLOC) GTEST_SKIP() << "the sanitizer runtime owns malloc";
+  long n = 0;
+  {
+    CountAllocations c;
+    VecX<double> x(7);
+    x.setZero();
+    n = c.count();
+  }
+  EXPECT_GE(n, 1) << "the counter must see an Eigen allocation, or the test below proves nothing";
+}
+
+using Variant = std::tuple<Formulation, DerivativeMode, ShootingScheme, bool>;
+
+class NoMallocUpdate : public ::testing::TestWithParam<Variant> {};
+
+TEST_P(NoMallocUpdate, UpdatesAfterTheFirstDoNotAllocate) {
+  if (!IDMPC_COUNT_MALLOC) GTEST_SKIP() << "the sanitizer runtime owns malloc";
+  const auto& [formulation, mode, shooting, limited] = GetParam();
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const double inf = std::numeric_limits<double>::infinity();
+  const TorqueLimits limits = limited ? TorqueLimits{(VecX<double>(4) << -20, -inf, -20, -inf).finished(),
+                                                     (VecX<double>(4) << 20, inf, 20, inf).finished()}
+                                      : TorqueLimits{};
+  Shooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, limits);
+  CgmresSettings s;
+  s.shooting = shooting;
+  Cgmres solver(ocp, s);
+  const VecX<double> q = (VecX<double>(4) << -1.5, 0.25, 0.27, -0.23).finished();
+  const VecX<double> v = (VecX<double>(4) << 2.0, -1.0, 0.5, 0.3).finished();
+  solver.initialize(0.5, q, v);
+  ASSERT_TRUE(solver.update(0.5, q, v));  // the first update may size workspaces
+  long allocations = 0;
+  {
+    CountAllocations c;
+    for (int k = 1; k <= 3; ++k) ASSERT_TRUE(solver.update(0.5 + k * s.dt, q, v));
+    allocations = c.count();
+  }
+  EXPECT_EQ(allocations, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Controllers, NoMallocUpdate,
+    ::testing::Combine(::testing::Values(Formulation::kForwardDynamics, Formulation::kInverseDynamics),
+                       ::testing::Values(DerivativeMode::kMatrix, DerivativeMode::kAdjoint),
+                       ::testing::Values(ShootingScheme::kSingle, ShootingScheme::kMultiple), ::testing::Bool()),
+    [](const auto& info) {
+      const Variant& v = info.param;
+      return to_string(std::get<0>(v)) + "_" + to_string(std::get<1>(v)) + "_" + to_string(std::get<2>(v)) +
+             (std::get<3>(v) ? "_limits" : "");
+    });
+
+}  // namespace
+}  // namespace idmpc
