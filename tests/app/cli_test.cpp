@@ -35,6 +35,7 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/mujoco/reference.hpp"
+#include "support/sanitizers.hpp"
 
 namespace idmpc {
 namespace {
@@ -49,7 +50,7 @@ const std::string kTree = IDMPC_SOURCE_DIR "/mjcf/tree.xml";
 
 // a cap on virtual memory (KiB) for commands that, without their fix, would exhaust memory;
 // none under AddressSanitizer, which reserves terabytes of address space for its shadow
-#ifdef __SANITIZE_ADDRESS__
+#if IDMPC_TEST_ASAN
 const std::string kMemoryCap;
 #else
 const std::string kMemoryCap = "ulimit -v 3000000;";

@@ -125,7 +125,8 @@ class OcpGradient
     : public ::testing::TestWithParam<std::tuple<std::string, Formulation, DerivativeMode>> {};
 
 TEST_P(OcpGradient, ResidualIsTheScaledGradientOfTheDiscreteCost) {
-  const auto& [path, formulation, mode] = GetParam();
+  const auto& [path, formulation_binding, mode] = GetParam();
+  const Formulation formulation = formulation_binding;  // a variable the lambdas may capture (C++17)
   const Problem p = load_problem(path);
   const int n = p.model.n, N = 6;
   const double T = 0.3;
@@ -214,7 +215,8 @@ double part_error(const VecX<double>& F, const VecX<double>& expected, int N, in
 }
 
 TEST_P(OcpGradient, WithTorqueLimitsResidualIsTheGradientOfTheAugmentedCost) {
-  const auto& [path, formulation, mode] = GetParam();
+  const auto& [path, formulation_binding, mode] = GetParam();
+  const Formulation formulation = formulation_binding;  // a variable the lambdas may capture (C++17)
   const Problem p = load_problem(path);
   const int n = p.model.n, N = 6;
   const double T = 0.3;
