@@ -1,7 +1,7 @@
 #!/usr/bin/env -S /usr/bin/python3
 """Writes the main job's Markdown report from the swing-up summaries and logs.
 
-Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix,adjoint}.{json,csv}; writes report.md)
+Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix_paper,matrix,adjoint}.{json,csv}; writes report.md)
 """
 import json
 import math
@@ -48,13 +48,19 @@ def compiler():
         return "unknown compiler"
 
 
+# the variants of tools/run.sh: file suffix and how the report names it
+VARIANTS = (("matrix_paper", "matrix, stage by stage (the paper's arithmetic)"),
+            ("matrix", "matrix, SIMD lanes"),
+            ("adjoint", "adjoint, SIMD lanes"))
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: report.py RESULTS_DIR")
     out_dir = sys.argv[1]
     runs = {}
     for f in ("fd", "id"):
-        for d in ("matrix", "adjoint"):
+        for d, _ in VARIANTS:
             path = os.path.join(out_dir, f"swingup_{f}_{d}.json")
             if not os.path.exists(path):
                 sys.exit(f"report.py: missing summary '{path}'")
@@ -67,23 +73,23 @@ def main():
               "|---|---|---|---|---|---|---|---|---|---|"]
     for (f, d), s in runs.items():
         div = f"yes, at {s['diverged_at']:.3f} s" if s["diverged"] else "no"
-        lines.append(f"| C/GMRES ({f.upper()}) | {d} | {div} | {s['mean_update_ms']:.3f} | "
+        lines.append(f"| C/GMRES ({f.upper()}) | {dict(VARIANTS)[d]} | {div} | {s['mean_update_ms']:.3f} | "
                      f"{s['p50_update_ms']:.3f} | {s['p95_update_ms']:.3f} | {s['evaluations_per_update']} | "
                      f"{s['final_q_error']:.2e} | {s['final_v_norm']:.2e} | {s['mean_residual']:.2e} |")
     paper = {c["formulation"]: c["ms"] for c in load_paper_tables()
              if c["table"] == "12" and c["N"] == 25 and c["kmax"] == 10}
     lines += ["", "Ratio ID/FD of the mean (p50) time per update, measured side by side in this run:", ""]
-    for d in ("matrix", "adjoint"):
+    for d, name in VARIANTS:
         fd, idd = runs[("fd", d)], runs[("id", d)]
-        lines.append(f"- {d}: {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
+        lines.append(f"- {name}: {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
                      f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); the paper (N = 25, kmax = 10): "
                      f"{paper['id']}/{paper['fd']} = {paper['id'] / paper['fd']:.2f}")
     lines += ["", "Same control from both formulations (Q_a = 0): relative RMS difference of the torque "
               "histories, RMS of |u_ID − u_FD| over RMS of |u_FD|:", ""]
-    for d in ("matrix", "adjoint"):
+    for d, name in VARIANTS:
         a = os.path.join(out_dir, f"swingup_id_{d}.csv")
         b = os.path.join(out_dir, f"swingup_fd_{d}.csv")
-        lines.append(f"- {d}: whole run {torque_agreement(a, b):.3f}, after the first 0.5 s "
+        lines.append(f"- {name}: whole run {torque_agreement(a, b):.3f}, after the first 0.5 s "
                      f"{torque_agreement(a, b, 0.5):.4f}; largest joint-angle difference "
                      f"{max_angle_difference(a, b):.3g} rad")
     lines += ["", "Outputs: `fig2.png` (the paper's Fig. 2, FD and ID overlaid), "

@@ -16,20 +16,25 @@ model="$here/mjcf/arm4.xml"
 echo "== model check"
 "$idmpc" check "$model" --samples 10
 
-for d in matrix adjoint; do
+# matrix mode twice: stage by stage (--no-simd-stages, the paper's arithmetic) and with its stage
+# derivatives in SIMD lanes (the default); adjoint mode with its default lanes
+for v in matrix_paper matrix adjoint; do
+  d=${v%_paper}
+  lanes=()
+  [ "$v" = matrix_paper ] && lanes=(--no-simd-stages)
   for f in fd id; do
-    echo "== swing-up: C/GMRES (${f^^}), $d derivatives"
-    "$idmpc" swingup "$model" --formulation "$f" --derivatives "$d" \
-      --log "$results/swingup_${f}_${d}.csv" --summary "$results/swingup_${f}_${d}.json"
+    echo "== swing-up: C/GMRES (${f^^}), $d derivatives${lanes:+, stage by stage}"
+    "$idmpc" swingup "$model" --formulation "$f" --derivatives "$d" "${lanes[@]}" \
+      --log "$results/swingup_${f}_${v}.csv" --summary "$results/swingup_${f}_${v}.json"
   done
 done
 
 echo "== Fig. 2"
-/usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_matrix.csv" "$results/swingup_id_matrix.csv" \
+/usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
   --labels "C/GMRES (FD)" "C/GMRES (ID)" --residual -o "$results/fig2.png"
 
 echo "== video"
-"$idmpc" render "$model" --compare "$results/swingup_fd_matrix.csv" "$results/swingup_id_matrix.csv" \
+"$idmpc" render "$model" --compare "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
   --out "$results/swingup_fd_vs_id.mp4"
 
 echo "== report"

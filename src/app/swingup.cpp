@@ -65,8 +65,8 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
                    "damped arms"),
       [](const Task& s, Task& d) { d.implicit_damping = s.implicit_damping; });
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
-                   "evaluate the horizon stages one by one instead of in SIMD lanes (ID + adjoint; FD + "
-                   "adjoint under multiple shooting)"),
+                   "evaluate the horizon stages one by one instead of in SIMD lanes (ID; FD matrix; FD "
+                   "adjoint under multiple shooting): the paper's arithmetic"),
       [](const Task& s, Task& d) { d.simd_stages = s.simd_stages; });
 }
 

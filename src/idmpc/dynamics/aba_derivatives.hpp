@@ -11,11 +11,33 @@
 /// 2 % when every column is solved through the factorization at twice the cost, and 6e-5 for
 /// the adjoint mode): see the README.
 
+#include <type_traits>
+
 #include "idmpc/dynamics/aba.hpp"
 #include "idmpc/dynamics/minv.hpp"
 #include "idmpc/dynamics/rnea_derivatives.hpp"
 
 namespace idmpc {
+
+namespace detail {
+
+/// @brief C = −A·B: Eigen's product for double; for SIMD packs, whose lanes Eigen's product
+/// kernels cannot take (they compare scalars), column by column.
+template <typename S> void negated_product(const MatX<S>& A, const MatX<S>& B, MatX<S>& C) {
+  if constexpr (std::is_floating_point_v<S>) {
+    C.noalias() = -A * B;
+  } else {
+    for (Eigen::Index j = 0; j < B.cols(); ++j) {
+      C.col(j).setZero();
+      for (Eigen::Index k = 0; k < A.cols(); ++k) {
+        const S b = B(k, j);
+        for (Eigen::Index i = 0; i < A.rows(); ++i) C(i, j) -= A(i, k) * b;
+      }
+    }
+  }
+}
+
+}  // namespace detail
 
 /// @brief ∂q̈/∂q, ∂q̈/∂v and M⁻¹ into data.da_dq, da_dv, Minv. Precondition: data holds
 /// aba(model, data, q, v, τ) at this point (its q̈ and articulated inertias are reused); checked
@@ -34,8 +56,8 @@ void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen
   // dense products
   for (int i = 0; i < model.n; ++i) data.oUD[i] = data.oX[i].apply_transpose_force(data.Ud[i]);
   detail::minv_world_sweeps(model, data, data.Dinv);
-  data.da_dq.noalias() = -data.Minv * data.dtau_dq;
-  data.da_dv.noalias() = -data.Minv * data.dtau_dv;
+  detail::negated_product(data.Minv, data.dtau_dq, data.da_dq);
+  detail::negated_product(data.Minv, data.dtau_dv, data.da_dv);
 }
 
 /// @brief Fills data.qdd = FD(q, v, τ), data.da_dq, data.da_dv and data.Minv (= ∂q̈/∂τ).

@@ -36,4 +36,11 @@ template const Vp& rnea(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBa
 template void rnea_vjp(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&);
 template const Vp& aba(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
                        const Eigen::MatrixBase<Vp>&, const Eigen::MatrixBase<Vp>&);
+template const Vp& minv_apply(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&);
+template const Vp& rnea_after_aba(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
+                                  const Eigen::MatrixBase<Vp>&);
+template void rnea_derivatives(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
+                               const Eigen::MatrixBase<Vp>&, const Eigen::MatrixBase<Vp>&);
+template void aba_derivatives_after_aba(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
+                                        const Eigen::MatrixBase<Vp>&);
 }  // namespace idmpc

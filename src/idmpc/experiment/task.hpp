@@ -13,8 +13,9 @@
 ///   "qref"         target joint positions: a scalar or one per joint
 ///   "duration"     simulated seconds
 ///   "formulation"  "fd" or "id";  "derivatives": "matrix" or "adjoint"
-///   "simd_stages"  evaluate horizon stages in SIMD lanes where they are independent: ID + adjoint;
-///                  FD + adjoint under multiple shooting (bool)
+///   "simd_stages"  evaluate horizon stages in SIMD lanes where they are independent: ID (stage
+///                  dynamics and products), FD matrix (stage derivatives after the rollout), FD
+///                  adjoint under multiple shooting (bool)
 ///   "direct_torque" apply joint torques through qfrc_applied instead of the actuators (bool)
 ///   "implicit_damping" integrate joint damping implicitly in the horizon (with_implicit_damping,
 ///                  step T_f/N; needs alpha = 0): for heavily damped arms (bool)

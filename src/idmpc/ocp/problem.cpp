@@ -49,8 +49,7 @@ OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMo
   const Vec zero = Vec::Zero(n);
   cost_.set_torque_reference(rnea(model_, stage_[0], cost_.q_ref(), zero, zero));
   for (MatX<double>* x : {&gq_all_, &gv_all_, &Mw_all_}) *x = MatX<double>::Zero(n, N);
-  lanes_ = lanes_possible();
-  costate_lanes_ = costate_lanes_possible();
+  set_stages_in_lanes(true);
 }
 
 void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
@@ -103,8 +102,37 @@ void OcpProblem::stage_lanes_at_costates(int i0, int count, const MatX<double>& 
   costate_products_ = true;
 }
 
+// ∂q̈/∂q, ∂q̈/∂v and M⁻¹ for up to kStageLanes stages per ABA and its derivatives; unused lanes
+// repeat the last stage
+void OcpProblem::stage_derivative_lanes(int i0, int count, const MatX<double>& q, const MatX<double>& v,
+                                        const MatX<double>& u) {
+  assert(derivative_lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
+  const int n = model_.n;
+  for (int k = 0; k < kStageLanes; ++k) {
+    const int i = i0 + std::min(k, count - 1);
+    for (int j = 0; j < n; ++j) {
+      ql_[j][k] = q(j, i);
+      vl_[j][k] = v(j, i);
+      al_[j][k] = u(j, i);  // the torque, in the acceleration's buffer
+    }
+  }
+  aba(model_, lane_data_, ql_, vl_, al_);
+  aba_derivatives_after_aba(model_, lane_data_, ql_, vl_);
+  for (int k = 0; k < count; ++k) {
+    Data& d = stage_[static_cast<size_t>(i0 + k)];
+    for (int c = 0; c < n; ++c) {
+      for (int r = 0; r < n; ++r) {
+        d.da_dq(r, c) = lane_data_.da_dq(r, c)[k];
+        d.da_dv(r, c) = lane_data_.da_dv(r, c)[k];
+        d.Minv(r, c) = lane_data_.Minv(r, c)[k];
+      }
+    }
+  }
+  derivatives_from_lanes_ = true;
+}
+
 // u = ID(q, v, a) and (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w with w = ∂(L + ρᵀ(s∘c))/∂u, for up to kStageLanes stages
-// per RNEA; unused lanes repeat the last stage
+// per RNEA (with adjoints) or RNEA derivatives (matrix mode); unused lanes repeat the last stage
 void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
                                       const MatX<double>& v, const MatX<double>& a,
                                       const MatX<double>& rho, MatX<double>& u) {
@@ -119,7 +147,13 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
     }
     for (int j = 0; j < m; ++j) rl_[j][k] = rho(j, i);
   }
-  const VecX<StagePack>& tau = rnea(model_, lane_data_, ql_, vl_, al_);
+  const bool adjoint = mode_ == DerivativeMode::kAdjoint;
+  if (adjoint) {
+    rnea(model_, lane_data_, ql_, vl_, al_);
+  } else {
+    rnea_derivatives(model_, lane_data_, ql_, vl_, al_);
+  }
+  const VecX<StagePack>& tau = lane_data_.tau;
   // w = R(u − u_ref) + 2s∘ρ∘(u − ū) on the bounded joints
   const VecX<double>& R = cost_.weights().R;
   const VecX<double>& u_ref = cost_.u_ref();
@@ -128,7 +162,23 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
     const int j = bounds_.joints()[static_cast<size_t>(k)];
     wl_[j] += (2.0 * bounds_.scale()[k]) * rl_[k] * (tau[j] - bounds_.middle()[k]);
   }
-  rnea_vjp(model_, lane_data_, wl_);
+  if (adjoint) {
+    rnea_vjp(model_, lane_data_, wl_);
+  } else {
+    // (∂τ/∂q)ᵀw, (∂τ/∂v)ᵀw and M w (M symmetric) column by column: Eigen's products cannot take
+    // SIMD packs
+    for (int c = 0; c < n; ++c) {
+      StagePack gq(0.0), gv(0.0), ga(0.0);
+      for (int r = 0; r < n; ++r) {
+        gq += lane_data_.dtau_dq(r, c) * wl_[r];
+        gv += lane_data_.dtau_dv(r, c) * wl_[r];
+        ga += lane_data_.M(r, c) * wl_[r];
+      }
+      lane_data_.g_q[c] = gq;
+      lane_data_.g_v[c] = gv;
+      lane_data_.g_a[c] = ga;
+    }
+  }
   for (int k = 0; k < count; ++k) {
     const int i = i0 + k;
     for (int j = 0; j < n; ++j) {
@@ -193,7 +243,8 @@ void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In d, In rho, 
         gv_ = -data.g_v;
       }
     } else {
-      aba_derivatives_after_aba(model_, data, q, v);  // ABA of stage i is in data from stage_dynamics
+      // from stage_derivative_lanes, or now: ABA of stage i is in data from stage_dynamics
+      if (!derivatives_from_lanes_) aba_derivatives_after_aba(model_, data, q, v);
       gq_.noalias() = data.da_dq.transpose() * gmm_next;
       gv_.noalias() = data.da_dv.transpose() * gmm_next;
       hu = w_;

@@ -68,16 +68,33 @@ class OcpProblem {
   /// The stage's workspace keeps the linearization for stage_hamiltonian.
   void stage_dynamics(int i, In q, In v, In input, Out output);
 
-  /// @brief ID with adjoints only: the stage dynamics and all stage products are independent
-  /// of the costates, so kStageLanes stages run at once in SIMD lanes. On by default.
-  bool lanes_possible() const {
-    return formulation_ == Formulation::kInverseDynamics && mode_ == DerivativeMode::kAdjoint;
-  }
+  /// @brief ID: the rollout does not depend on the stage dynamics, so kStageLanes stages run at
+  /// once in SIMD lanes: with adjoints their RNEA and vector–Jacobian products, in matrix mode
+  /// their RNEA derivatives and the products with them. On by default.
+  bool lanes_possible() const { return formulation_ == Formulation::kInverseDynamics; }
   void set_stages_in_lanes(bool on) {
     lanes_ = on && lanes_possible();
     costate_lanes_ = on && costate_lanes_possible();
+    derivative_lanes_ = on && derivative_lanes_possible();
   }
   bool stages_in_lanes() const { return lanes_; }
+
+  /// @brief FD in matrix mode: the derivatives ∂q̈/∂q, ∂q̈/∂v, M⁻¹ of a stage depend on its state
+  /// and torque only, so after the rollout kStageLanes stages run at once
+  /// (stage_derivative_lanes); the backward sweep then takes the products with the costates. On
+  /// by default, off with set_stages_in_lanes(false).
+  bool derivative_lanes_possible() const {
+    return formulation_ == Formulation::kForwardDynamics && mode_ == DerivativeMode::kMatrix;
+  }
+  bool derivative_lanes() const { return derivative_lanes_; }
+
+  /// @brief FD matrix: the derivatives of stages i0 … i0 + count − 1 (count ≤ kStageLanes) at the
+  /// columns of q, v and the torques u (n × N), ABA included, into each stage's workspace, where
+  /// stage_hamiltonian uses them until release_derivative_lanes().
+  void stage_derivative_lanes(int i0, int count, const MatX<double>& q, const MatX<double>& v,
+                              const MatX<double>& u);
+  /// @brief stage_hamiltonian computes the derivatives again (after stage_derivative_lanes).
+  void release_derivative_lanes() { derivatives_from_lanes_ = false; }
 
   /// @brief FD with adjoints, when the costates are given (multiple shooting's residual at stored
   /// trajectories): then the whole stage — a = FD(q, v, u), μ = M⁻¹γ_{i+1} and the products
@@ -97,9 +114,9 @@ class OcpProblem {
   /// @brief stage_hamiltonian computes its products again (after stage_lanes_at_costates).
   void release_costate_lanes() { costate_products_ = false; }
 
-  /// @brief Stages i0 … i0 + count − 1 (count ≤ kStageLanes) at once: columns of q, v, a (n × N)
-  /// and of the multipliers rho (m × N) in, u (n × N) out; the products of each stage are kept
-  /// for stage_hamiltonian.
+  /// @brief ID: stages i0 … i0 + count − 1 (count ≤ kStageLanes) at once: columns of q, v, a
+  /// (n × N) and of the multipliers rho (m × N) in, u (n × N) out; the products of each stage (by
+  /// adjoint sweeps or, in matrix mode, by the derivative matrices) are kept for stage_hamiltonian.
   void stage_dynamics_lanes(int i0, int count, const MatX<double>& q, const MatX<double>& v,
                             const MatX<double>& a, const MatX<double>& rho, MatX<double>& u);
 
@@ -125,6 +142,8 @@ class OcpProblem {
   int N_;
   bool lanes_ = false;
   bool costate_lanes_ = false;
+  bool derivative_lanes_ = false;
+  bool derivatives_from_lanes_ = false;  ///< stage_[i].da_dq, da_dv, Minv hold stage_derivative_lanes' results
   bool costate_products_ = false;  ///< gq_all_, gv_all_, Mw_all_ (= μ) hold stage_lanes_at_costates' products
 
   std::vector<Data> stage_;                 ///< one dynamics workspace per stage

@@ -74,6 +74,15 @@ void Shooting::stage_dynamics(int stages) {
   }
 }
 
+bool Shooting::derivatives_in_lanes(int stages) {
+  if (!problem_.derivative_lanes()) return false;
+  // stage 0 needs no state derivatives (its costates λ_0, γ_0 are never used)
+  for (int i0 = 1; i0 < stages; i0 += kStageLanes) {
+    problem_.stage_derivative_lanes(i0, std::min(kStageLanes, stages - i0), x_.q, x_.v, u_);
+  }
+  return stages > 1;
+}
+
 void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int stages, const ShootingDefects* e) {
   using clock = std::chrono::steady_clock;
   const int sd = problem_.stage_dim();
@@ -100,6 +109,7 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   }
   // the ID rollout does not depend on u: the stages' dynamics afterwards (in lanes if enabled)
   if (!fd) stage_dynamics(stages);
+  const bool derivative_lanes = derivatives_in_lanes(stages);
   const auto t1 = timing_ ? clock::now() : t0;
 
   // terminal costates (eqs. 16, 18), then the backward sweep (eqs. 22–24); λ_0, γ_0 are
@@ -123,6 +133,7 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
       gmm.col(i) += e->gmm.col(i);
     }
   }
+  if (derivative_lanes) problem_.release_derivative_lanes();
   if (timing_) {
     times_.rollout += std::chrono::duration<double>(t1 - t0).count();
     times_.costate += std::chrono::duration<double>(clock::now() - t1).count();
@@ -155,6 +166,7 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   } else {
     stage_dynamics(N);
   }
+  const bool derivative_lanes = derivatives_in_lanes(N);
   const auto& q = x_.q;
   const auto& v = x_.v;
   e.q.col(N).setZero();
@@ -180,6 +192,7 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
     e.gmm.col(i) = x_.gmm.col(i) - x_.gmm.col(i + 1) - dtau * hv_;
   }
   if (costate_lanes) problem_.release_costate_lanes();
+  if (derivative_lanes) problem_.release_derivative_lanes();
   if (timing_) {
     times_.rollout += std::chrono::duration<double>(t1 - t0).count();
     times_.costate += std::chrono::duration<double>(clock::now() - t1).count();

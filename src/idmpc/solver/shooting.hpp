@@ -23,7 +23,7 @@ namespace idmpc {
 
 /// @brief Wall-clock seconds spent in each part of the residual evaluations.
 struct OcpTimes {
-  double rollout = 0;  ///< forward sweep: dynamics along the horizon (ABA or RNEA)
+  double rollout = 0;  ///< forward sweep: dynamics along the horizon (ABA or RNEA), and what runs in lanes after it
   double costate = 0;  ///< backward sweep: derivatives/adjoints, costates and F
   long evaluations = 0;
 };
@@ -99,9 +99,13 @@ class Shooting {
   /// @brief Torques u_i (n × N) of the stages of the last residual evaluation.
   const MatX<double>& torques() const { return u_; }
 
-  /// @brief ID with adjoints only: stages in SIMD lanes (OcpProblem::set_stages_in_lanes).
+  /// @brief Stages in SIMD lanes wherever they are independent (OcpProblem::set_stages_in_lanes):
+  /// ID's stage dynamics and products; FD matrix's stage derivatives; FD adjoint's stages at stored
+  /// costates (multiple shooting only).
   void set_stage_batching(bool on) { problem_.set_stages_in_lanes(on); }
-  bool stage_batching() const { return problem_.stages_in_lanes(); }
+  /// @brief Whether single shooting's residual runs stages in lanes (ID, FD matrix); FD adjoint's
+  /// costate lanes are OcpProblem::costate_lanes().
+  bool stage_batching() const { return problem_.stages_in_lanes() || problem_.derivative_lanes(); }
 
   /// @brief Accumulated timing of residual evaluations (off unless enabled).
   void enable_timing(bool on) { timing_ = on; }
@@ -113,6 +117,9 @@ class Shooting {
   void unpack(In U, int stages);
   // the stage dynamics at the states in x_ (stages independent given the states)
   void stage_dynamics(int stages);
+  // FD matrix: the derivatives of stages 1 … stages − 1 in SIMD lanes, after the stage dynamics
+  // (OcpProblem::stage_derivative_lanes); whether any ran
+  bool derivatives_in_lanes(int stages);
 
   OcpProblem problem_;
   bool timing_ = false;
