@@ -50,8 +50,8 @@ def compiler():
 
 # the variants of tools/run.sh: file suffix and how the report names it
 VARIANTS = (("matrix_paper", "matrix, stage by stage (the paper's arithmetic)"),
-            ("matrix", "matrix, SIMD lanes"),
-            ("adjoint", "adjoint, SIMD lanes"))
+            ("matrix", "matrix, stage derivatives in SIMD lanes"),
+            ("adjoint", "adjoint (ID: stages in SIMD lanes; FD: none under single shooting)"))
 
 
 def main():
