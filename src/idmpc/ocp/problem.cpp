@@ -66,39 +66,43 @@ void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
   }
 }
 
+namespace {
+
+// lane k ← column i0 + min(k, count − 1) + shift of x: unused lanes repeat the last stage
+void pack_lanes(const MatX<double>& x, int i0, int count, int shift, VecX<StagePack>& out) {
+  for (int k = 0; k < kStageLanes; ++k) {
+    const int i = i0 + std::min(k, count - 1) + shift;
+    for (Eigen::Index j = 0; j < x.rows(); ++j) out[j][k] = x(j, i);
+  }
+}
+
+// column i0 + k of out ← lane k, for the count stages in use
+void unpack_lanes(const VecX<StagePack>& x, int i0, int count, MatX<double>& out) {
+  for (int k = 0; k < count; ++k) {
+    for (Eigen::Index j = 0; j < x.size(); ++j) out(j, i0 + k) = x[j][k];
+  }
+}
+
+}  // namespace
+
 // a = FD(q, v, u), μ = M⁻¹γ_{i+1}, (∂ID/∂q)ᵀμ and (∂ID/∂v)ᵀμ for up to kStageLanes stages per
 // ABA; unused lanes repeat the last stage
 void OcpProblem::stage_lanes_at_costates(int i0, int count, const MatX<double>& q, const MatX<double>& v,
                                          const MatX<double>& u, const MatX<double>& gmm, MatX<double>& a) {
   assert(costate_lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
-  const int n = model_.n;
-  for (int k = 0; k < kStageLanes; ++k) {
-    const int i = i0 + std::min(k, count - 1);
-    for (int j = 0; j < n; ++j) {
-      ql_[j][k] = q(j, i);
-      vl_[j][k] = v(j, i);
-      al_[j][k] = u(j, i);       // the torque, in the acceleration's buffer
-      wl_[j][k] = gmm(j, i + 1);  // γ_{i+1}
-    }
-  }
-  const VecX<StagePack>& qdd = aba(model_, lane_data_, ql_, vl_, al_);
-  for (int k = 0; k < count; ++k) {
-    for (int j = 0; j < n; ++j) a(j, i0 + k) = qdd[j][k];
-  }
+  pack_lanes(q, i0, count, 0, ql_);
+  pack_lanes(v, i0, count, 0, vl_);
+  pack_lanes(u, i0, count, 0, al_);    // the torque, in the acceleration's buffer
+  pack_lanes(gmm, i0, count, 1, wl_);  // γ_{i+1}
+  unpack_lanes(aba(model_, lane_data_, ql_, vl_, al_), i0, count, a);
   // μ = M⁻¹γ by the ABA factorization, then the RNEA part of the stage and its adjoint at μ
   const VecX<StagePack>& mu = minv_apply(model_, lane_data_, wl_);
-  for (int k = 0; k < count; ++k) {
-    for (int j = 0; j < n; ++j) Mw_all_(j, i0 + k) = mu[j][k];
-  }
+  unpack_lanes(mu, i0, count, Mw_all_);
   al_ = mu;  // rnea_vjp reads its weights while it overwrites data: a copy
   rnea_after_aba(model_, lane_data_, ql_, vl_);
   rnea_vjp(model_, lane_data_, al_);
-  for (int k = 0; k < count; ++k) {
-    for (int j = 0; j < n; ++j) {
-      gq_all_(j, i0 + k) = lane_data_.g_q[j][k];
-      gv_all_(j, i0 + k) = lane_data_.g_v[j][k];
-    }
-  }
+  unpack_lanes(lane_data_.g_q, i0, count, gq_all_);
+  unpack_lanes(lane_data_.g_v, i0, count, gv_all_);
   costate_products_ = true;
 }
 
@@ -108,14 +112,9 @@ void OcpProblem::stage_derivative_lanes(int i0, int count, const MatX<double>& q
                                         const MatX<double>& u) {
   assert(derivative_lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
   const int n = model_.n;
-  for (int k = 0; k < kStageLanes; ++k) {
-    const int i = i0 + std::min(k, count - 1);
-    for (int j = 0; j < n; ++j) {
-      ql_[j][k] = q(j, i);
-      vl_[j][k] = v(j, i);
-      al_[j][k] = u(j, i);  // the torque, in the acceleration's buffer
-    }
-  }
+  pack_lanes(q, i0, count, 0, ql_);
+  pack_lanes(v, i0, count, 0, vl_);
+  pack_lanes(u, i0, count, 0, al_);  // the torque, in the acceleration's buffer
   aba(model_, lane_data_, ql_, vl_, al_);
   aba_derivatives_after_aba(model_, lane_data_, ql_, vl_);
   for (int k = 0; k < count; ++k) {
@@ -138,15 +137,10 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
                                       const MatX<double>& rho, MatX<double>& u) {
   assert(lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
   const int n = model_.n, m = bounds_.m();
-  for (int k = 0; k < kStageLanes; ++k) {
-    const int i = i0 + std::min(k, count - 1);
-    for (int j = 0; j < n; ++j) {
-      ql_[j][k] = q(j, i);
-      vl_[j][k] = v(j, i);
-      al_[j][k] = a(j, i);
-    }
-    for (int j = 0; j < m; ++j) rl_[j][k] = rho(j, i);
-  }
+  pack_lanes(q, i0, count, 0, ql_);
+  pack_lanes(v, i0, count, 0, vl_);
+  pack_lanes(a, i0, count, 0, al_);
+  pack_lanes(rho, i0, count, 0, rl_);
   const bool adjoint = mode_ == DerivativeMode::kAdjoint;
   if (adjoint) {
     rnea(model_, lane_data_, ql_, vl_, al_);
@@ -179,15 +173,10 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
       lane_data_.g_a[c] = ga;
     }
   }
-  for (int k = 0; k < count; ++k) {
-    const int i = i0 + k;
-    for (int j = 0; j < n; ++j) {
-      u(j, i) = tau[j][k];
-      gq_all_(j, i) = lane_data_.g_q[j][k];
-      gv_all_(j, i) = lane_data_.g_v[j][k];
-      Mw_all_(j, i) = lane_data_.g_a[j][k];
-    }
-  }
+  unpack_lanes(tau, i0, count, u);
+  unpack_lanes(lane_data_.g_q, i0, count, gq_all_);
+  unpack_lanes(lane_data_.g_v, i0, count, gv_all_);
+  unpack_lanes(lane_data_.g_a, i0, count, Mw_all_);
 }
 
 void OcpProblem::stage_hamiltonian(int i, In q, In v, In a, In u, In d, In rho, In lmd_next,
