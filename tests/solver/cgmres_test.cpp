@@ -394,8 +394,10 @@ TEST_P(Continuation, ZeroHorizonInitializationWithTorqueLimits) {
 
 // With init_full_horizon and an open horizon (α = 0), the initialization solves the N-stage
 // problem itself: from rest far from the target the optimal torques press against the bounds
-// over the first stages. Without limits the same start solves the unconstrained problem.
-constexpr double kFullInitResidual = 1e-8;  // init_tolerance·√dim, met in every case (≤ 3e-10 measured)
+// over the first stages. Without limits the same start solves the unconstrained problem, in
+// both cases to init_tolerance·√dim: the continuation's levels may stop at 1e-8 of their start
+// ‖F‖, the problem itself is then polished (measured ≤ 5e-10; 1.2e-8 for FD adjoint without
+// the polish, where the last level stopped at 1e-8 of its start).
 
 TEST_P(Continuation, FullHorizonInitializationWithAndWithoutTorqueLimits) {
   const auto& [formulation, mode] = GetParam();
@@ -410,10 +412,11 @@ TEST_P(Continuation, FullHorizonInitializationWithAndWithoutTorqueLimits) {
     const TorqueLimits limits = limited ? arm4_limits(20.0) : TorqueLimits{};
     Shooting ocp(p.model, formulation, mode, paper_weights(n), VecX<double>::Zero(n), N, limits);
     Cgmres solver(ocp, s);
-    EXPECT_LE(solver.initialize(0.0, q0, v0), kFullInitResidual);
+    const double tolerance = s.init_tolerance * std::sqrt(static_cast<double>(ocp.dim()));
+    EXPECT_LE(solver.initialize(0.0, q0, v0), tolerance);
     VecX<double> F(ocp.dim());
     ocp.residual(solver.solution(), q0, v0, s.Tf, F);
-    EXPECT_LE(F.norm(), kFullInitResidual);
+    EXPECT_LE(F.norm(), tolerance);
     if (limited) {
       expect_inside(ocp, solver.solution(), limits, 0.0);
       // the bound is reached: the first stage's torque on joint 0 within 1 % of it

@@ -175,15 +175,16 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
   VecX<double> F(dim), Fw(dim), Uw(dim), dU(dim);
   double norm = 0;
 
-  // Newton at horizon Tk from U_; true when ‖F‖ reached the tolerance, or 1e-8 of its start
-  auto newton = [&](double Tk) {
+  // Newton at horizon Tk from U_; true when ‖F‖ reached the tolerance, or (unless `polish`)
+  // 1e-8 of its start
+  auto newton = [&](double Tk, bool polish = false) {
     double start = 0;
     for (int it = 0; it <= settings_.init_iterations; ++it) {
       ocp_.residual(U_, q, v, Tk, F);
       norm = F.norm();
       if (it == 0) start = norm;
       if (!std::isfinite(norm)) return false;
-      if (norm <= std::max(tolerance, kInitRelativeTolerance * start)) return true;
+      if (norm <= (polish ? tolerance : std::max(tolerance, kInitRelativeTolerance * start))) return true;
       if (it == settings_.init_iterations) return false;
       // direction by GMRES on forward-difference products
       auto apply = [&](const Eigen::Ref<const VecX<double>>& W, Eigen::Ref<VecX<double>> out) {
@@ -234,6 +235,9 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
     for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd + n + m, m) *= 0.1;
     newton(T);
   }
+  // the levels above may stop at 1e-8 of their start; the problem itself is solved to the
+  // tolerance, as far as Newton descends (U_ changes only on a descent step)
+  newton(T, true);
   ocp_.residual(U_, q, v, T, F);
   norm = F.norm();
   if (!std::isfinite(norm)) throw std::runtime_error("full-horizon initialization: non-finite residual");
