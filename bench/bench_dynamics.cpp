@@ -190,6 +190,18 @@ void BM_MjSolveM(benchmark::State& state, const char* name) {
       });
 }
 
+// M⁻¹x at a new point for MuJoCo: the sparse LTDL factorization of M (qM from one mj_forward
+// outside the loop), then the solve; what minv_apply after aba is to ABA
+void BM_MjFactorSolveM(benchmark::State& state, const char* name) {
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { mj_forward(f.m.get(), f.d.get()); },
+      [](DynamicsFixture& f) {
+        mj_factorM(f.m.get(), f.d.get());
+        mj_solveM(f.m.get(), f.d.get(), f.d->qfrc_smooth, f.x.data(), 1);
+        benchmark::DoNotOptimize(f.d->qfrc_smooth);
+      });
+}
+
 // one case per model: the paper's arm and chains, plus two larger generated chains
 #define IDMPC_BENCH_MODELS(BM)             \
   BENCHMARK_CAPTURE(BM, arm4, "arm4");     \
@@ -213,6 +225,7 @@ IDMPC_BENCH_MODELS(BM_RneaVjp);
 IDMPC_BENCH_MODELS(BM_RneaVjpSweepOnly);
 IDMPC_BENCH_MODELS(BM_MinvApply);
 IDMPC_BENCH_MODELS(BM_MjSolveM);
+IDMPC_BENCH_MODELS(BM_MjFactorSolveM);
 IDMPC_BENCH_MODELS(BM_Minv);
 IDMPC_BENCH_MODELS(BM_MinvAfterAba);
 

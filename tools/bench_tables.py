@@ -413,7 +413,13 @@ def scaling_tables(updates, residuals):
 
 DYN_COLS = [("Rnea", "RNEA"), ("MjInverse", "mj_inverse"), ("Aba", "ABA"), ("MjForward", "mj_forward"),
             ("Crba", "CRBA"), ("RneaDerivatives", "RNEA derivs"), ("AbaDerivatives", "ABA derivs"),
-            ("RneaVjp", "RNEA + vjp"), ("RneaVjpSweepOnly", "vjp sweep"), ("MinvApply", "M⁻¹x")]
+            ("RneaVjp", "RNEA + vjp"), ("RneaVjpSweepOnly", "vjp sweep"), ("Minv", "dense M⁻¹"),
+            ("MinvApply", "M⁻¹x"), ("MjSolveM", "mj_solveM"), ("MjFactorSolveM", "mj_factorM + mj_solveM")]
+
+# the MuJoCo-relative levels Pinocchio 3.7 reached on this machine (issue 10: the upper end of
+# its range over n = 4…32, measured side by side with MuJoCo 2.2): kernel, MuJoCo baseline, level
+PINOCCHIO_LEVELS = (("Crba", "MjInverse", 0.38, "CRBA"), ("AbaDerivatives", "MjForward", 2.3, "ABA derivatives"),
+                    ("Minv", "MjForward", 0.73, "dense M⁻¹ from q"), ("MinvApply", "MjSolveM", 1.25, "M⁻¹x"))
 
 
 def dyn_ratio(dyn, a, b, n):
@@ -437,10 +443,15 @@ def dynamics_tables(dyn):
                       fmt_ratio(dyn_ratio(dyn, "RneaDerivatives", "MjInverse", n)),
                       fmt_ratio(dyn_ratio(dyn, "RneaVjp", "Rnea", n)),
                       fmt_ratio(dyn_ratio(dyn, "AbaDerivatives", "MjForward", n)),
-                      fmt_ratio(dyn_ratio(dyn, "Crba", "Rnea", n))])
+                      fmt_ratio(dyn_ratio(dyn, "Crba", "Rnea", n)),
+                      fmt_ratio(dyn_ratio(dyn, "Crba", "MjInverse", n)),
+                      fmt_ratio(dyn_ratio(dyn, "Minv", "MjForward", n)),
+                      fmt_ratio(dyn_ratio(dyn, "MinvApply", "MjSolveM", n)),
+                      fmt_ratio(dyn_ratio(dyn, "MinvApply", "MjFactorSolveM", n))])
     out.append("Ratios:\n")
     out.append(table(["n", "RNEA / mj_inverse", "ABA / mj_forward", "RNEA derivs / mj_inverse",
-                      "(RNEA + vjp) / RNEA", "ABA derivs / mj_forward", "CRBA / RNEA"], rrows) + "\n")
+                      "(RNEA + vjp) / RNEA", "ABA derivs / mj_forward", "CRBA / RNEA", "CRBA / mj_inverse",
+                      "dense M⁻¹ / mj_forward", "M⁻¹x / mj_solveM", "M⁻¹x / (mj_factorM + mj_solveM)"], rrows) + "\n")
     exps = [[c, fmt(loglog_slope([(n, dyn.get(k, {}).get(n)) for n in ns if n >= 8]), 3)] for k, c in DYN_COLS]
     out.append("Fitted exponent p of time ∝ n^p (n ≥ 8):\n")
     out.append(table(["kernel", "p"], exps) + "\n")
@@ -517,6 +528,13 @@ def targets_section(dyn, updates, stage_ops):
         worst = max((r for _, r in rs if r is not None), default=None)
         rows.append([text.format(limit), "; ".join(f"n={n}: {fmt_ratio(r)}" for n, r in rs) + f" (worst {fmt_ratio(worst)})",
                      verdict(ok)])
+    # Pinocchio's MuJoCo-relative levels, at n = 4…32 (the range issue 10 measured it over)
+    for (a, b_, limit, what) in PINOCCHIO_LEVELS:
+        rs = [(n, dyn_ratio(dyn, a, b_, n)) for n in dn if 4 <= n <= 32]
+        ok = None if not rs or any(r is None for _, r in rs) else all(r <= limit for _, r in rs)
+        base = {"MjInverse": "mj_inverse", "MjForward": "mj_forward", "MjSolveM": "mj_solveM"}[b_]
+        rows.append([f"{what} ≤ {limit} × {base} at n = 4…32 (Pinocchio's level, issue 10)",
+                     "; ".join(f"n={n}: {fmt_ratio(r)}" for n, r in rs), verdict(ok)])
     return "## Target check\n\n" + table(["target", "measured", "verdict"], rows) + "\n"
 
 

@@ -10,8 +10,7 @@ namespace idmpc {
 
 /// @brief Forward dynamics q̈ = FD(q, v, τ); q, v, τ of size n. Returns data.qdd and leaves
 /// the articulated inertias (data.IA, U, D, and Ud = U/D, Dinv = 1/D) for minv_apply and
-/// minv_matrix_after_aba. ABA itself and minv_apply divide by D, as they always did: their
-/// rounding is what the FD controllers' tests were measured with.
+/// minv_matrix_after_aba. ABA itself divides by D (multiplying by Dinv timed the same).
 template <typename S, typename Q, typename Vv, typename T>
 const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
@@ -62,6 +61,12 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
 
 /// @brief y = M(q)⁻¹x in O(n), reusing the articulated inertias of the last aba(q, ·, ·) call
 /// (an ABA sweep with zero velocity and gravity). Returns data.Minv_x.
+///
+/// The sweeps carry x's articulated bias forces to the root and the accelerations back, one
+/// joint after the other. What does not depend on x is taken off that chain: U/D of each joint
+/// in its parent's frame, Y_i = X_upᵀ·U_i/D_i (data.Ud_parent), so that a force reaches the
+/// parent as X_upᵀp_i + Y_i·u_i and a joint's acceleration is u_i/D_i − Y_i·a_parent, with
+/// the transforms of p_i and a_parent beside, not before, the products with Y_i.
 /// Precondition: data holds aba at q (checked in debug builds).
 template <typename S, typename Xx>
 const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
@@ -71,22 +76,29 @@ const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::Mat
                     "another q since");
   const int n = model.n;
   for (int i = 0; i < n; ++i) data.pz[i].setZero();
-  // backward: articulated bias forces of the load x
+  // backward: articulated bias forces of the load x, u_i = x_i − S_iᵀp_i
   for (int i = n - 1; i >= 0; --i) {
     const int p = model.parent[i];
-    data.Minv_x[i] = x[i] - joint_project<S>(model, i, data.pz[i]);
+    const S u = x[i] - joint_project<S>(model, i, data.pz[i]);
+    data.Minv_x[i] = u;
     if (p >= 0) {
-      data.pz[p] += data.X_up[i].apply_transpose_force(
-          Vec6<S>(data.pz[i] + data.U[i] * (data.Minv_x[i] / data.D[i])));
+      const Transform<S>& X = data.X_up[i];
+      data.Ud_parent[i] = X.apply_transpose_force(data.Ud[i]);
+      data.pz[p] += X.apply_transpose_force(data.pz[i]) + data.Ud_parent[i] * u;
     }
   }
-  // forward: accelerations
+  // forward: accelerations, root first
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
-    const Vec6<S> ap = p < 0 ? Vec6<S>::Zero() : data.X_up[i].apply_motion(data.az[p]);
-    data.Minv_x[i] = (data.Minv_x[i] - data.U[i].dot(ap)) / data.D[i];
-    data.az[i] = ap;
-    add_joint_motion(model, i, data.Minv_x[i], data.az[i]);
+    S y = data.Minv_x[i] * data.Dinv[i];
+    if (p < 0) {
+      data.az[i].setZero();
+    } else {
+      y -= data.Ud_parent[i].dot(data.az[p]);
+      data.az[i] = data.X_up[i].apply_motion(data.az[p]);
+    }
+    data.Minv_x[i] = y;
+    add_joint_motion(model, i, y, data.az[i]);
   }
   return data.Minv_x;
 }

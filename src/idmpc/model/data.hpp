@@ -96,7 +96,7 @@ template <typename S> struct DataTpl {
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
+        pz(n), az(n), Ud_parent(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
         rhs(MatX<S>::Zero(n, n)),
         passes(n) {}
@@ -137,8 +137,8 @@ template <typename S> struct DataTpl {
   List<Vec6<S>> fbar, abar, vbar;
   VecX<S> g_q, g_v, g_a;  ///< (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M·w
 
-  // M⁻¹x through the ABA factorization
-  List<Vec6<S>> pz, az;
+  // M⁻¹x through the ABA factorization; Ud_parent = X_upᵀ·Ud, U/D in the parent's frame
+  List<Vec6<S>> pz, az, Ud_parent;
   VecX<S> Minv_x;
   // dense M⁻¹ (minv.hpp): articulated inertias, U/D and 1/D in the world frame
   List<Mat6<S>> oYA;
