@@ -86,7 +86,7 @@ template <typename S> Vec6<S> motion_subspace_in(const Model& model, int i, cons
 /// @brief m += S_i·x: x a joint-space scalar and m a 6-vector, or x a 1×k row and m a 6×k
 /// block (k motions at once).
 template <typename X, typename Dst>
-EIGEN_ALWAYS_INLINE void add_joint_motion(const Model& model, int i, const X& x, Eigen::MatrixBase<Dst>& m) {
+void add_joint_motion(const Model& model, int i, const X& x, Eigen::MatrixBase<Dst>& m) {
   using S = typename Dst::Scalar;
   const Vec3<S> s = model.axis[i].template cast<S>();
   if (model.joint_type[i] == JointType::kRevolute) {
@@ -97,7 +97,7 @@ EIGEN_ALWAYS_INLINE void add_joint_motion(const Model& model, int i, const X& x,
 }
 
 /// @brief S_iᵀ·f (projection of a force, or of any 6-vector, on joint i's axis).
-template <typename S> EIGEN_ALWAYS_INLINE S joint_project(const Model& model, int i, const Vec6<S>& f) {
+template <typename S> S joint_project(const Model& model, int i, const Vec6<S>& f) {
   const Vec3<S> s = model.axis[i].template cast<S>();
   return model.joint_type[i] == JointType::kRevolute ? S(s.dot(f.template head<3>()))
                                                      : S(s.dot(f.template tail<3>()));
@@ -117,7 +117,7 @@ void subtract_joint_projection(const Model& model, int i, const Eigen::MatrixBas
 }
 
 /// @brief M·S_i for a 6×6 matrix M (e.g. U = IA·S of the articulated-body algorithm).
-template <typename S> EIGEN_ALWAYS_INLINE Vec6<S> times_motion_subspace(const Model& model, int i, const Mat6<S>& M) {
+template <typename S> Vec6<S> times_motion_subspace(const Model& model, int i, const Mat6<S>& M) {
   const Vec3<S> s = model.axis[i].template cast<S>();
   return model.joint_type[i] == JointType::kRevolute ? Vec6<S>(M.template leftCols<3>() * s)
                                                      : Vec6<S>(M.template rightCols<3>() * s);

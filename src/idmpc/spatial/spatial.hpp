@@ -28,12 +28,12 @@ template <typename S> Mat3<S> skew(const Vec3<S>& x) {
 
 /// @brief 3-D cross product written out (Eigen's generic version shuffles SSE registers).
 template <typename S, typename A, typename B>
-EIGEN_ALWAYS_INLINE Vec3<S> cross3(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b) {
+inline Vec3<S> cross3(const Eigen::MatrixBase<A>& a, const Eigen::MatrixBase<B>& b) {
   return Vec3<S>(a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]);
 }
 
 /// @brief Motion cross product m1 × m2 (Featherstone eq. 2.31).
-template <typename S> EIGEN_ALWAYS_INLINE Vec6<S> cross_motion(const Vec6<S>& m1, const Vec6<S>& m2) {
+template <typename S> Vec6<S> cross_motion(const Vec6<S>& m1, const Vec6<S>& m2) {
   const auto w1 = m1.template head<3>(), v1 = m1.template tail<3>();
   const auto w2 = m2.template head<3>(), v2 = m2.template tail<3>();
   Vec6<S> r;
@@ -43,7 +43,7 @@ template <typename S> EIGEN_ALWAYS_INLINE Vec6<S> cross_motion(const Vec6<S>& m1
 }
 
 /// @brief Force cross product m ×* f (Featherstone eq. 2.32).
-template <typename S> EIGEN_ALWAYS_INLINE Vec6<S> cross_force(const Vec6<S>& m, const Vec6<S>& f) {
+template <typename S> Vec6<S> cross_force(const Vec6<S>& m, const Vec6<S>& f) {
   const auto w = m.template head<3>(), v = m.template tail<3>();
   const auto n = f.template head<3>(), fl = f.template tail<3>();
   Vec6<S> r;
@@ -92,7 +92,7 @@ template <typename S> struct Transform {
   static Transform identity() { return Transform{}; }
 
   /// @brief X m: motion from A to B coordinates.
-  EIGEN_ALWAYS_INLINE Vec6<S> apply_motion(const Vec6<S>& m) const {
+  Vec6<S> apply_motion(const Vec6<S>& m) const {
     Vec6<S> out;
     const auto w = m.template head<3>();
     out.template head<3>() = E * w;
@@ -100,7 +100,7 @@ template <typename S> struct Transform {
     return out;
   }
   /// @brief X⁻¹ m: motion from B to A coordinates.
-  EIGEN_ALWAYS_INLINE Vec6<S> apply_inverse_motion(const Vec6<S>& m) const {
+  Vec6<S> apply_inverse_motion(const Vec6<S>& m) const {
     Vec6<S> out;
     const Vec3<S> w = E.transpose() * m.template head<3>();
     out.template head<3>() = w;
@@ -108,7 +108,7 @@ template <typename S> struct Transform {
     return out;
   }
   /// @brief X* f: force from A to B coordinates.
-  EIGEN_ALWAYS_INLINE Vec6<S> apply_force(const Vec6<S>& f) const {
+  Vec6<S> apply_force(const Vec6<S>& f) const {
     Vec6<S> out;
     const auto fl = f.template tail<3>();
     out.template head<3>() = E * (f.template head<3>() - cross3<S>(r, fl));
@@ -116,7 +116,7 @@ template <typename S> struct Transform {
     return out;
   }
   /// @brief Xᵀ f: force from B back to A coordinates (= (X*)⁻¹ f).
-  EIGEN_ALWAYS_INLINE Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
+  Vec6<S> apply_transpose_force(const Vec6<S>& f) const {
     Vec6<S> out;
     const Vec3<S> fl = E.transpose() * f.template tail<3>();
     out.template head<3>() = E.transpose() * f.template head<3>() + cross3<S>(r, fl);
@@ -164,7 +164,7 @@ template <typename S> struct Inertia {
     return out;
   }
   /// @brief I m (a force).
-  EIGEN_ALWAYS_INLINE Vec6<S> apply(const Vec6<S>& mo) const {
+  Vec6<S> apply(const Vec6<S>& mo) const {
     const auto w = mo.template head<3>(), v = mo.template tail<3>();
     Vec6<S> out;
     out.template head<3>() = Ibar * w + cross3<S>(h, v);
