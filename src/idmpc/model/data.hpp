@@ -96,9 +96,9 @@ template <typename S> struct DataTpl {
         da_dv(MatX<S>::Zero(n, n)),
         fbar(n), abar(n), vbar(n),
         g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Ud_parent(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
+        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
-        rhs(MatX<S>::Zero(n, n)),
+        rhs(MatX<S>::Zero(n, n)), Ud_parent(n),
         passes(n) {}
 
   int n;
@@ -137,8 +137,8 @@ template <typename S> struct DataTpl {
   List<Vec6<S>> fbar, abar, vbar;
   VecX<S> g_q, g_v, g_a;  ///< (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M·w
 
-  // M⁻¹x through the ABA factorization; Ud_parent = X_upᵀ·Ud, U/D in the parent's frame
-  List<Vec6<S>> pz, az, Ud_parent;
+  // M⁻¹x through the ABA factorization (and Ud_parent below)
+  List<Vec6<S>> pz, az;
   VecX<S> Minv_x;
   // dense M⁻¹ (minv.hpp): articulated inertias, U/D and 1/D in the world frame
   List<Mat6<S>> oYA;
@@ -151,6 +151,8 @@ template <typename S> struct DataTpl {
   Block6 Tm;
   Eigen::Matrix<S, 3, Eigen::Dynamic> Wm;
   MatX<S> rhs;
+  /// U/D in the parent's frame, X_upᵀ·Ud (minv_apply)
+  List<Vec6<S>> Ud_parent;
 
   /// what the buffers above hold (debug builds)
   PassRecord<S> passes;
