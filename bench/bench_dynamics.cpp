@@ -150,6 +150,29 @@ void BM_MinvApply(benchmark::State& state, const char* name) {
       [](DynamicsFixture& f) { benchmark::DoNotOptimize(minv_apply(model_of(f), *f.data, f.x).data()); });
 }
 
+// M⁻¹x with the sparse LᵀDL factor of M (crba and ltdl_factor outside the loop): Pinocchio's
+// cholesky::solve, the counterpart of mj_solveM
+void BM_LtdlSolve(benchmark::State& state, const char* name) {
+  time_kernel(
+      state, name,
+      [](DynamicsFixture& f) {
+        crba(model_of(f), *f.data, f.q);
+        ltdl_factor(model_of(f), *f.data);
+      },
+      [](DynamicsFixture& f) { benchmark::DoNotOptimize(ltdl_solve(model_of(f), *f.data, f.x).data()); });
+}
+
+// the factorization of M (crba outside the loop) and the solve: the counterpart of
+// mj_factorM + mj_solveM
+void BM_LtdlFactorSolve(benchmark::State& state, const char* name) {
+  time_kernel(
+      state, name, [](DynamicsFixture& f) { crba(model_of(f), *f.data, f.q); },
+      [](DynamicsFixture& f) {
+        ltdl_factor(model_of(f), *f.data);
+        benchmark::DoNotOptimize(ltdl_solve(model_of(f), *f.data, f.x).data());
+      });
+}
+
 // dense M⁻¹ from q (as Pinocchio's computeMinverse)
 void BM_Minv(benchmark::State& state, const char* name) {
   time_kernel(state, name, [](DynamicsFixture& f) {
@@ -224,7 +247,9 @@ IDMPC_BENCH_MODELS(BM_AbaDerivatives);
 IDMPC_BENCH_MODELS(BM_RneaVjp);
 IDMPC_BENCH_MODELS(BM_RneaVjpSweepOnly);
 IDMPC_BENCH_MODELS(BM_MinvApply);
+IDMPC_BENCH_MODELS(BM_LtdlSolve);
 IDMPC_BENCH_MODELS(BM_MjSolveM);
+IDMPC_BENCH_MODELS(BM_LtdlFactorSolve);
 IDMPC_BENCH_MODELS(BM_MjFactorSolveM);
 IDMPC_BENCH_MODELS(BM_Minv);
 IDMPC_BENCH_MODELS(BM_MinvAfterAba);

@@ -1197,7 +1197,7 @@ TEST_F(Cli, CheckPassesOnAHingeAndASlide) {
   write("model.xml", hinge_slide_mjcf());
   const Result r = idmpc("check model.xml --samples 3");
   EXPECT_EQ(r.code, 0) << r.err << r.out;
-  EXPECT_NE(r.out.find("all 15 checks passed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("all 16 checks passed"), std::string::npos) << r.out;
 }
 
 TEST_F(Cli, CheckGivesSlideJointsInMetresAndNewtons) {
@@ -1239,7 +1239,7 @@ TEST_P(CliCheckUnmodeled, IsComparedWithoutIt) {
   write("model.xml", model);
   const Result r = idmpc("check model.xml --samples 3");
   EXPECT_EQ(r.code, 0) << r.err << r.out;
-  EXPECT_NE(r.out.find("all 15 checks passed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("all 16 checks passed"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("  - " + feature + " switched off"), std::string::npos) << r.out;
 }
 

@@ -1,6 +1,6 @@
 // The debug-build checks of the dynamics entry points: sizes, and the call-order preconditions
 // (rnea_vjp after rnea; minv_apply, minv_apply_columns, aba_derivatives_after_aba after aba, at
-// the same point). Death tests, so they run only where the checks are compiled in
+// the same point; ltdl_factor after M, ltdl_solve after ltdl_factor). Death tests, so they run only where the checks are compiled in
 // (IDMPC_DEBUG_CHECKS, i.e. without NDEBUG); skipped in Release builds.
 #include <gtest/gtest.h>
 
@@ -72,6 +72,19 @@ TEST_F(DebugChecksDeathTest, AbaFactorizationUsersAtAnotherPointAbort) {
   EXPECT_DEATH(minv_apply_columns(model_, data_, 3), "minv_apply_columns needs aba");
 }
 
+TEST_F(DebugChecksDeathTest, LtdlWithoutMassMatrixOrFactorAborts) {
+  aba(model_, data_, q_, v_, a_);  // no M yet
+  EXPECT_DEATH(ltdl_factor(model_, data_), "ltdl_factor needs data.M");
+  EXPECT_DEATH(ltdl_solve(model_, data_, x_), "ltdl_solve needs ltdl_factor");
+  crba(model_, data_, q_);
+  EXPECT_DEATH(ltdl_solve(model_, data_, x_), "ltdl_solve needs ltdl_factor");
+  ltdl_factor(model_, data_);
+  ltdl_solve(model_, data_, x_);  // fine
+  Data fresh(model_);
+  rnea_derivatives(model_, fresh, q_, v_, a_);  // M as ∂τ/∂a
+  ltdl_factor(model_, fresh);                   // fine
+}
+
 TEST_F(DebugChecksDeathTest, WrongSizesAbort) {
   const VecX<double> short_ = VecX<double>::Zero(2);
   EXPECT_DEATH(rnea(model_, data_, short_, v_, a_), "rnea: q, v, a must have size model.n");
@@ -83,6 +96,9 @@ TEST_F(DebugChecksDeathTest, WrongSizesAbort) {
   aba(model_, data_, q_, v_, a_);
   EXPECT_DEATH(minv_apply(model_, data_, short_), "minv_apply: x must have size model.n");
   EXPECT_DEATH(minv_apply_columns(model_, data_, 4), "expected 0 <= m <= model.n");
+  crba(model_, data_, q_);
+  ltdl_factor(model_, data_);
+  EXPECT_DEATH(ltdl_solve(model_, data_, short_), "ltdl_solve: x must have size model.n");
   const Model other(std::vector<Link>(2), Vec3<double>::Zero());
   EXPECT_DEATH(rnea(other, data_, short_, short_, short_), "data was made for a model of another size");
 }

@@ -1,6 +1,6 @@
 // Our dynamics against MuJoCo (check_model) on every shipped model and on 200 seeded random
 // trees, plus the internal-consistency identities written out directly: CRBA = RNEA columns
-// minus bias, M symmetric positive definite, M·M⁻¹ = I, minv_apply = M⁻¹x,
+// minus bias, M symmetric positive definite, M·M⁻¹ = I, minv_apply = M⁻¹x, M = LᵀDL,
 // rnea(aba(τ)) = τ, analytic derivatives vs central differences, adjoints vs matrices.
 #include <gtest/gtest.h>
 
@@ -282,6 +282,37 @@ TEST_P(DynamicsTest, MinvApplyAfterAbaIsMassMatrixSolve) {
       // residual form: M·y = x up to rounding in M·y
       EXPECT_LE(scaled_error(M * got, x, max_abs(M) * max_abs(got)), kRounding);
       const double cond_scale = max_abs(M) * max_abs(llt.solve(MatX<double>::Identity(n(), n())));
+      EXPECT_LE(max_abs(got - expected) / (cond_scale * std::max(1.0, max_abs(expected))),
+                kInverseRounding * n());
+    }
+  }
+}
+
+// the sparse factor: exact (LᵀDL rebuilds M from the ancestor entries alone: no fill-in), and
+// its solve is M⁻¹x; mj_solveM is compared in check_model
+TEST_P(DynamicsTest, LtdlFactorRebuildsMassMatrixAndSolves) {
+  Data data(model());
+  std::mt19937 rng(GetParam().seed);
+  for (int k = 0; k < GetParam().samples; ++k) {
+    SCOPED_TRACE("sample " + std::to_string(k));
+    const State s = random_state(rng);
+    const MatX<double> M = crba(model(), data, s.q);
+    ltdl_factor(model(), data);
+    // L from the ancestor entries of data.Lt only; everything else of L is zero
+    MatX<double> L = MatX<double>::Identity(n(), n());
+    for (int i = 0; i < n(); ++i) {
+      for (int j = model().parent[i]; j >= 0; j = model().parent[j]) L(i, j) = data.Lt(j, i);
+    }
+    EXPECT_LE(scaled_error(L.transpose() * data.Dl.asDiagonal() * L, M, max_abs(M)), kRounding);
+    EXPECT_LE(max_abs(data.Dl.cwiseProduct(data.Dlinv) - VecX<double>::Ones(n())), kRounding);
+    const Eigen::LLT<MatX<double>> llt(M);
+    const double cond_scale = max_abs(M) * max_abs(llt.solve(MatX<double>::Identity(n(), n())));
+    for (int r = 0; r < 3; ++r) {
+      const VecX<double> x = random_vector(rng, 5.0);
+      const VecX<double> expected = llt.solve(x);
+      rnea(model(), data, s.q, s.v, s.a);  // other passes leave the factor alone
+      const VecX<double> got = ltdl_solve(model(), data, x);
+      EXPECT_LE(scaled_error(M * got, x, max_abs(M) * max_abs(got)), kRounding);
       EXPECT_LE(max_abs(got - expected) / (cond_scale * std::max(1.0, max_abs(expected))),
                 kInverseRounding * n());
     }

@@ -86,11 +86,14 @@ TEST_P(NoMallocTest, AlgorithmsDoNotAllocateAfterDataConstruction) {
   guarded("minv_apply", [&] { minv_apply(model, data, x); });
   guarded("rnea_after_aba", [&] { rnea_after_aba(model, data, q, v); });
   guarded("crba", [&] { crba(model, data, q); });
+  guarded("ltdl_factor", [&] { ltdl_factor(model, data); });
+  guarded("ltdl_solve", [&] { ltdl_solve(model, data, x); });
   guarded("minv_matrix", [&] { minv_matrix(model, data, q); });
   guarded("rnea_derivatives", [&] { rnea_derivatives(model, data, q, v, a); });
   guarded("aba_derivatives", [&] { aba_derivatives(model, data, q, v, tau); });
   // the guarded calls did real work
-  EXPECT_TRUE(data.tau.allFinite() && data.qdd.allFinite() && data.Minv.allFinite());
+  EXPECT_TRUE(data.tau.allFinite() && data.qdd.allFinite() && data.Minv.allFinite() &&
+              data.y_ltdl.allFinite());
   EXPECT_GT(data.M.norm(), 0.0);
 }
 

@@ -20,6 +20,7 @@ const MatX<S>& crba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
   IDMPC_DEBUG_CHECK(data.n == model.n, "crba: data was made for a model of another size");
   IDMPC_DEBUG_CHECK(q.size() == model.n, "crba: q must have size model.n");
   data.passes.kinematics(q);
+  data.passes.mass_matrix();
   const int n = model.n;
   if (model.ancestor_pairs <= 3 * n) {
     // shallow: composite inertias in link frames, leaves first

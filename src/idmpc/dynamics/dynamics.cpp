@@ -14,6 +14,8 @@ template const Vd& minv_apply(const Model&, Data&, const Eigen::MatrixBase<Vd>&)
 template const Vd& rnea_after_aba(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                                   const Eigen::MatrixBase<Vd>&);
 template const MatX<double>& crba(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
+template void ltdl_factor(const Model&, Data&);
+template const Vd& ltdl_solve(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template void rnea_derivatives(const Model&, Data&, const Eigen::MatrixBase<Vd>&,
                                const Eigen::MatrixBase<Vd>&, const Eigen::MatrixBase<Vd>&);
 template void aba_derivatives_after_aba(const Model&, Data&, const Eigen::MatrixBase<Vd>&,

@@ -45,6 +45,7 @@ void rnea_derivatives_impl(const Model& model, DataTpl<S>& data, const Eigen::Ma
   IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
                     "rnea_derivatives: q, v, a must have size model.n");
   if constexpr (kJointTransforms) data.passes.kinematics(q);
+  data.passes.mass_matrix();
   const int n = model.n;
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass in the world frame: placements, axes, velocities, accelerations, forces

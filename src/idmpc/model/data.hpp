@@ -13,7 +13,8 @@ namespace idmpc {
 
 /// @brief Which algorithm's results a Data holds, for the debug checks of the call-order
 /// preconditions (rnea_vjp after rnea or rnea_after_aba; minv_apply, minv_apply_columns and
-/// aba_derivatives_after_aba after aba, at the same point). Written and read only when
+/// aba_derivatives_after_aba after aba, at the same point; ltdl_factor after M was computed,
+/// ltdl_solve after ltdl_factor). Written and read only when
 /// IDMPC_DEBUG_CHECKS; always present, so that Data's layout does not depend on the build type.
 template <typename S> class PassRecord {
  public:
@@ -53,6 +54,17 @@ template <typename S> class PassRecord {
     }
   }
 
+  /// data.M was computed (crba or rnea_derivatives); nothing else writes it
+  void mass_matrix() {
+    if constexpr (kOn) mass_matrix_ = true;
+  }
+  /// ltdl_factor factored data.M into Lt, Dl (nothing else writes them)
+  void ltdl() {
+    if constexpr (kOn) ltdl_ = true;
+  }
+  bool holds_mass_matrix() const { return mass_matrix_; }
+  bool holds_ltdl() const { return ltdl_; }
+
   /// the buffers hold an rnea pass whose X_up is still in place
   bool holds_rnea() const { return rnea_ && same(rnea_q_, X_up_q_); }
   /// the buffers hold an aba factorization whose X_up is still in place
@@ -77,7 +89,7 @@ template <typename S> class PassRecord {
   }
 
   VecX<S> X_up_q_, rnea_q_, aba_q_, aba_v_;
-  bool rnea_ = false, aba_ = false;
+  bool rnea_ = false, aba_ = false, mass_matrix_ = false, ltdl_ = false;
 };
 
 template <typename S> struct DataTpl {
@@ -99,6 +111,8 @@ template <typename S> struct DataTpl {
         pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
         Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
         rhs(MatX<S>::Zero(n, n)), Ud_parent(n),
+        Lt(MatX<S>::Zero(n, n)), Dl(VecX<S>::Zero(n)), Dlinv(VecX<S>::Zero(n)),
+        y_ltdl(VecX<S>::Zero(n)),
         passes(n) {}
 
   int n;
@@ -151,10 +165,16 @@ template <typename S> struct DataTpl {
   Block6 Tm;
   Eigen::Matrix<S, 3, Eigen::Dynamic> Wm;
   MatX<S> rhs;
-  /// U/D in the parent's frame, X_upᵀ·Ud (minv_apply). Allocated last: constructed between az
-  /// and Minv_x, it moved the heap blocks of the n×n buffers after it, and FD matrix at n = 64
-  /// took 1.3–1.6× the time per update (their cache-set placement, not their arithmetic).
+  /// U/D in the parent's frame, X_upᵀ·Ud (minv_apply). Allocated after the buffers above:
+  /// constructed between az and Minv_x, it moved the heap blocks of the n×n buffers after it,
+  /// and FD matrix at n = 64 took 1.3–1.6× the time per update (their cache-set placement,
+  /// not their arithmetic).
   List<Vec6<S>> Ud_parent;
+
+  // sparse LᵀDL factor of M (ltdl.hpp), after the buffers above so as not to move them: column
+  // k of Lt holds row k of L at k's ancestors; D, 1/D; the solve's output
+  MatX<S> Lt;
+  VecX<S> Dl, Dlinv, y_ltdl;
 
   /// what the buffers above hold (debug builds)
   PassRecord<S> passes;

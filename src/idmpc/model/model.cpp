@@ -80,6 +80,14 @@ int count_ancestor_pairs(const std::vector<Link>& links) {
   return pairs;
 }
 
+std::vector<int> run_starts(const std::vector<Link>& links) {
+  std::vector<int> out(links.size());
+  for (size_t i = 0; i < links.size(); ++i) {
+    out[i] = i > 0 && links[i].parent == static_cast<int>(i) - 1 ? out[i - 1] : static_cast<int>(i);
+  }
+  return out;
+}
+
 }  // namespace
 
 Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
@@ -99,7 +107,8 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       joint_names(gather(links, &Link::joint_name)),
       name(std::move(model_name)),
       axis_index(axis_indices(links)),
-      ancestor_pairs(count_ancestor_pairs(links)) {}
+      ancestor_pairs(count_ancestor_pairs(links)),
+      run_start(run_starts(links)) {}
 
 Link Model::link(int i) const {
   Link l;

@@ -69,6 +69,11 @@ class Model {
   /// derived: Σ_i (number of ancestors of link i), the (i, ancestor) pairs that the
   /// O(n·depth) algorithms visit
   const int ancestor_pairs;
+  /// derived: the first link of the unbranched run of consecutive links that ends at i, the
+  /// smallest r ≤ i with parent[t] = t − 1 for every t in (r, i]. The ancestors of i are then
+  /// the runs [run_start[j], j] for j = parent[i], then parent[run_start[j]], …: contiguous
+  /// index ranges (one on a chain), which sparse algorithms sweep as vectors.
+  const std::vector<int> run_start;
 
   /// @brief Link i as given to the constructor (to rebuild a variant of this model).
   Link link(int i) const;

@@ -81,6 +81,7 @@ std::vector<CheckEntry> check_model(const mjModel* m, const Model& model, int sa
       {"adjoint (dID/dv)^T w vs matrix", 0, tol.adjoint},
       {"adjoint M w vs matrix", 0, tol.adjoint},
       {"M^-1 x (ABA sweep) vs matrix", 0, tol.adjoint},
+      {"M^-1 x (sparse LTDL of CRBA) vs mj_solveM", 0, tol.mujoco},
   };
   auto record = [&](size_t k, double err) { entries[k].record(err); };
 
@@ -125,6 +126,9 @@ std::vector<CheckEntry> check_model(const mjModel* m, const Model& model, int sa
     record(13, relative_error(data.g_a, M * w));
     aba(model, data, q, v, tau);
     record(14, relative_error(minv_apply(model, data, w), Minv * w));
+    crba(model, data, q);
+    ltdl_factor(model, data);
+    record(15, relative_error(ltdl_solve(model, data, w), ref.solve_mass(q, w)));
   }
   return entries;
 }

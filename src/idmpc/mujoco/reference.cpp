@@ -46,4 +46,13 @@ MatX<double> Reference::mass_matrix(const VecX<double>& q) {
   return M;
 }
 
+VecX<double> Reference::solve_mass(const VecX<double>& q, const VecX<double>& x) {
+  if (x.size() != m_->nv) throw std::invalid_argument("solve_mass: x must have size nv");
+  set_state(q, VecX<double>::Zero(m_->nv));
+  mj_forward(m_.get(), d_.get());
+  VecX<double> y(m_->nv);
+  mj_solveM(m_.get(), d_.get(), y.data(), x.data(), 1);
+  return y;
+}
+
 }  // namespace idmpc::mj

@@ -1,7 +1,7 @@
 #pragma once
 /// @file reference.hpp
 /// @brief MuJoCo's own dynamics on the same file, as the reference our algorithms must match:
-/// mj_inverse (qfrc_inverse), mj_forward (qacc, constraints off) and mj_fullM.
+/// mj_inverse (qfrc_inverse), mj_forward (qacc, constraints off), mj_fullM and mj_solveM.
 
 #include <mujoco/mujoco.h>
 
@@ -23,6 +23,8 @@ class Reference {
   VecX<double> forward(const VecX<double>& q, const VecX<double>& v, const VecX<double>& tau);
   /// @brief Dense M(q) from mj_fullM.
   MatX<double> mass_matrix(const VecX<double>& q);
+  /// @brief M(q)⁻¹x by mj_solveM with the sparse LTDL factor of mj_forward at q.
+  VecX<double> solve_mass(const VecX<double>& q, const VecX<double>& x);
 
   const mjModel* model() const { return m_.get(); }
   mjData* data() { return d_.get(); }
