@@ -414,12 +414,14 @@ def scaling_tables(updates, residuals):
 DYN_COLS = [("Rnea", "RNEA"), ("MjInverse", "mj_inverse"), ("Aba", "ABA"), ("MjForward", "mj_forward"),
             ("Crba", "CRBA"), ("RneaDerivatives", "RNEA derivs"), ("AbaDerivatives", "ABA derivs"),
             ("RneaVjp", "RNEA + vjp"), ("RneaVjpSweepOnly", "vjp sweep"), ("Minv", "dense M⁻¹"),
-            ("MinvApply", "M⁻¹x"), ("MjSolveM", "mj_solveM"), ("MjFactorSolveM", "mj_factorM + mj_solveM")]
+            ("MinvApply", "M⁻¹x"), ("LtdlSolve", "LᵀDL solve"), ("MjSolveM", "mj_solveM"),
+            ("LtdlFactorSolve", "LᵀDL factor + solve"), ("MjFactorSolveM", "mj_factorM + mj_solveM")]
 
 # the MuJoCo-relative levels Pinocchio 3.7 reached on this machine (issue 10: the upper end of
 # its range over n = 4…32, measured side by side with MuJoCo 2.2): kernel, MuJoCo baseline, level
 PINOCCHIO_LEVELS = (("Crba", "MjInverse", 0.38, "CRBA"), ("AbaDerivatives", "MjForward", 2.3, "ABA derivatives"),
-                    ("Minv", "MjForward", 0.73, "dense M⁻¹ from q"), ("MinvApply", "MjSolveM", 1.25, "M⁻¹x"))
+                    ("Minv", "MjForward", 0.73, "dense M⁻¹ from q"),
+                    ("LtdlSolve", "MjSolveM", 1.25, "M⁻¹x with a factor of M (LᵀDL solve)"))
 
 
 def dyn_ratio(dyn, a, b, n):
@@ -433,7 +435,9 @@ def dynamics_tables(dyn):
     out = ["## Dynamics kernels, µs per call\n",
            "One call at a random fixed state; MuJoCo with constraints and actuation disabled, same inputs. "
            "`RNEA + vjp` is the adjoint triple (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw, M w including the RNEA pass it needs; "
-           "`vjp sweep` the reverse sweep alone; `M⁻¹x` after one ABA.\n",
+           "`vjp sweep` the reverse sweep alone; `M⁻¹x` after one ABA (`minv_apply`, what FD adjoint uses); "
+           "`LᵀDL solve` with the sparse factor of M computed beforehand (as `mj_solveM` and Pinocchio's "
+           "`cholesky::solve`), `LᵀDL factor + solve` with M given (as `mj_factorM` + `mj_solveM`).\n",
            table(["n", *[c for _, c in DYN_COLS]], rows) + "\n"]
     rrows = []
     for n in ns:
@@ -447,11 +451,14 @@ def dynamics_tables(dyn):
                       fmt_ratio(dyn_ratio(dyn, "Crba", "MjInverse", n)),
                       fmt_ratio(dyn_ratio(dyn, "Minv", "MjForward", n)),
                       fmt_ratio(dyn_ratio(dyn, "MinvApply", "MjSolveM", n)),
-                      fmt_ratio(dyn_ratio(dyn, "MinvApply", "MjFactorSolveM", n))])
+                      fmt_ratio(dyn_ratio(dyn, "MinvApply", "MjFactorSolveM", n)),
+                      fmt_ratio(dyn_ratio(dyn, "LtdlSolve", "MjSolveM", n)),
+                      fmt_ratio(dyn_ratio(dyn, "LtdlFactorSolve", "MjFactorSolveM", n))])
     out.append("Ratios:\n")
     out.append(table(["n", "RNEA / mj_inverse", "ABA / mj_forward", "RNEA derivs / mj_inverse",
                       "(RNEA + vjp) / RNEA", "ABA derivs / mj_forward", "CRBA / RNEA", "CRBA / mj_inverse",
-                      "dense M⁻¹ / mj_forward", "M⁻¹x / mj_solveM", "M⁻¹x / (mj_factorM + mj_solveM)"], rrows) + "\n")
+                      "dense M⁻¹ / mj_forward", "M⁻¹x / mj_solveM", "M⁻¹x / (mj_factorM + mj_solveM)",
+                      "LᵀDL solve / mj_solveM", "LᵀDL factor + solve / (mj_factorM + mj_solveM)"], rrows) + "\n")
     exps = [[c, fmt(loglog_slope([(n, dyn.get(k, {}).get(n)) for n in ns if n >= 8]), 3)] for k, c in DYN_COLS]
     out.append("Fitted exponent p of time ∝ n^p (n ≥ 8):\n")
     out.append(table(["kernel", "p"], exps) + "\n")

@@ -40,6 +40,7 @@ template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
   IDMPC_DEBUG_CHECK(data.passes.holds_mass_matrix(),
                     "ltdl_factor needs data.M: call crba or rnea_derivatives first");
   const int n = model.n;
+  const bool chain = model.run_start[n - 1] == 0;  // one chain: the ancestors of k are 0 … k − 1
   auto& Lt = data.Lt;
   // the lower triangle of M at the ancestor entries, row k into column k (M is symmetric)
   for (int k = 0; k < n; ++k) {
@@ -62,9 +63,14 @@ template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
       const S a = hki * dk_inv;
       data.Dl[i] -= a * hki;
       S* const li = Lt.col(i).data();
-      detail::for_ancestor_runs(model, i, [&](int r, int len) {
+      const auto eliminate = [&](int r, int len) {
         for (int t = r; t < r + len; ++t) li[t] -= a * lk[t];
-      });
+      };
+      if (chain) {
+        eliminate(0, i);
+      } else {
+        detail::for_ancestor_runs(model, i, eliminate);
+      }
       lk[i] = a;
     }
   }
@@ -80,23 +86,35 @@ const VecX<S>& ltdl_solve(const Model& model, DataTpl<S>& data, const Eigen::Mat
   IDMPC_DEBUG_CHECK(data.passes.holds_ltdl(), "ltdl_solve needs ltdl_factor(model, data) first");
   const int n = model.n;
   auto& y = data.y_ltdl;
-  y = x;
   S* const yp = y.data();
+  for (int k = 0; k < n; ++k) yp[k] = x[k];
+  const S* const L = data.Lt.data();  // column k at L + k·n
   // Lᵀz = x: z_k is final once the rows below it are done; it enters its ancestors' rows
-  for (int k = n - 1; k > 0; --k) {
+  const auto backward_row = [&](int k, int r, int len) {
     const S zk = yp[k];
-    const S* const lk = data.Lt.col(k).data();
-    detail::for_ancestor_runs(model, k, [&](int r, int len) {
-      for (int t = r; t < r + len; ++t) yp[t] -= zk * lk[t];
-    });
-  }
+    const S* const lk = L + static_cast<Eigen::Index>(k) * n;
+    for (int t = r; t < r + len; ++t) yp[t] -= zk * lk[t];
+  };
   // L y = D⁻¹z: y_k takes the ancestors' results, which are final
+  const auto forward_row = [&](int k, int r, int len, S& yk) {
+    const S* const lk = L + static_cast<Eigen::Index>(k) * n;
+    for (int t = r; t < r + len; ++t) yk -= lk[t] * yp[t];
+  };
+  if (model.run_start[n - 1] == 0) {  // one chain: the ancestors of k are 0 … k − 1
+    for (int k = n - 1; k > 0; --k) backward_row(k, 0, k);
+    for (int k = 0; k < n; ++k) {
+      S yk = yp[k] * data.Dlinv[k];
+      forward_row(k, 0, k, yk);
+      yp[k] = yk;
+    }
+    return y;
+  }
+  for (int k = n - 1; k > 0; --k) {
+    detail::for_ancestor_runs(model, k, [&](int r, int len) { backward_row(k, r, len); });
+  }
   for (int k = 0; k < n; ++k) {
-    const S* const lk = data.Lt.col(k).data();
     S yk = yp[k] * data.Dlinv[k];
-    detail::for_ancestor_runs(model, k, [&](int r, int len) {
-      for (int t = r; t < r + len; ++t) yk -= lk[t] * yp[t];
-    });
+    detail::for_ancestor_runs(model, k, [&](int r, int len) { forward_row(k, r, len, yk); });
     yp[k] = yk;
   }
   return y;
