@@ -173,6 +173,33 @@ void BM_LtdlFactorSolve(benchmark::State& state, const char* name) {
       });
 }
 
+// The forward work of one FD-adjoint stage, two ways: q̈ = FD(q, v, τ), μ = M⁻¹x and the RNEA
+// pass at (q, v, q̈) that the adjoint sweep needs. As FD adjoint does it: ABA, M⁻¹x through its
+// factorization, the RNEA forces from its pass.
+void BM_FdStageAba(benchmark::State& state, const char* name) {
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    const Model& model = model_of(f);
+    aba(model, *f.data, f.q, f.v, f.tau);
+    benchmark::DoNotOptimize(minv_apply(model, *f.data, f.x).data());
+    benchmark::DoNotOptimize(rnea_after_aba(model, *f.data, f.q, f.v).data());
+  });
+}
+
+// … and through M: the bias RNEA(q, v, 0), CRBA, the sparse factor, two solves, then RNEA at
+// (q, v, q̈)
+void BM_FdStageCrbaLtdl(benchmark::State& state, const char* name) {
+  time_kernel(state, name, [](DynamicsFixture& f) {
+    const Model& model = model_of(f);
+    Data& data = *f.data;
+    f.w = f.tau - rnea(model, data, f.q, f.v, VecX<double>::Zero(f.n));  // τ − bias (reuses w)
+    crba(model, data, f.q);
+    ltdl_factor(model, data);
+    f.a = ltdl_solve(model, data, f.w);
+    benchmark::DoNotOptimize(ltdl_solve(model, data, f.x).data());
+    benchmark::DoNotOptimize(rnea(model, data, f.q, f.v, f.a).data());
+  });
+}
+
 // dense M⁻¹ from q (as Pinocchio's computeMinverse)
 void BM_Minv(benchmark::State& state, const char* name) {
   time_kernel(state, name, [](DynamicsFixture& f) {
@@ -251,6 +278,8 @@ IDMPC_BENCH_MODELS(BM_LtdlSolve);
 IDMPC_BENCH_MODELS(BM_MjSolveM);
 IDMPC_BENCH_MODELS(BM_LtdlFactorSolve);
 IDMPC_BENCH_MODELS(BM_MjFactorSolveM);
+IDMPC_BENCH_MODELS(BM_FdStageAba);
+IDMPC_BENCH_MODELS(BM_FdStageCrbaLtdl);
 IDMPC_BENCH_MODELS(BM_Minv);
 IDMPC_BENCH_MODELS(BM_MinvAfterAba);
 

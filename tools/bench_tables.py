@@ -459,6 +459,14 @@ def dynamics_tables(dyn):
                       "(RNEA + vjp) / RNEA", "ABA derivs / mj_forward", "CRBA / RNEA", "CRBA / mj_inverse",
                       "dense M⁻¹ / mj_forward", "M⁻¹x / mj_solveM", "M⁻¹x / (mj_factorM + mj_solveM)",
                       "LᵀDL solve / mj_solveM", "LᵀDL factor + solve / (mj_factorM + mj_solveM)"], rrows) + "\n")
+    srows = [[n, fmt(1e6 * dyn["FdStageAba"][n]), fmt(1e6 * dyn["FdStageCrbaLtdl"][n]),
+              fmt_ratio(dyn_ratio(dyn, "FdStageCrbaLtdl", "FdStageAba", n))]
+             for n in ns if n in dyn.get("FdStageAba", {}) and n in dyn.get("FdStageCrbaLtdl", {})]
+    if srows:
+        out.append("FD-adjoint stage, forward work (q̈ = FD(q, v, τ), one M⁻¹x, the RNEA pass at (q, v, q̈) "
+                   "its adjoint needs), µs: through ABA (what FD adjoint does: `aba`, `minv_apply`, "
+                   "`rnea_after_aba`) and through M (bias RNEA, CRBA, LᵀDL factor, two solves, RNEA):\n")
+        out.append(table(["n", "through ABA", "through M", "M / ABA"], srows) + "\n")
     exps = [[c, fmt(loglog_slope([(n, dyn.get(k, {}).get(n)) for n in ns if n >= 8]), 3)] for k, c in DYN_COLS]
     out.append("Fitted exponent p of time ∝ n^p (n ≥ 8):\n")
     out.append(table(["kernel", "p"], exps) + "\n")
