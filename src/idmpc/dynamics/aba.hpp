@@ -12,7 +12,7 @@ namespace idmpc {
 /// the articulated inertias (data.IA, U, D, and Ud = U/D, Dinv = 1/D) for minv_apply and
 /// minv_matrix_after_aba. ABA itself divides by D (multiplying by Dinv timed the same).
 template <typename S, typename Q, typename Vv, typename T>
-const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+[[gnu::flatten]] const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
   IDMPC_DEBUG_CHECK(data.n == model.n, "aba: data was made for a model of another size");
   IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && tau.size() == model.n,
@@ -69,7 +69,7 @@ const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
 /// the transforms of p_i and a_parent beside, not before, the products with Y_i.
 /// Precondition: data holds aba at q (checked in debug builds).
 template <typename S, typename Xx>
-const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
+[[gnu::flatten]] const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
   IDMPC_DEBUG_CHECK(data.n == model.n && x.size() == model.n, "minv_apply: x must have size model.n");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
                     "minv_apply needs aba(model, data, q, v, tau) first, and no other algorithm at "

@@ -16,7 +16,7 @@ namespace detail {
 /// up j's ancestors only (the rows of the upper triangle above j; four columns at a time, whose
 /// chains are independent); forward, row i takes the columns j ≥ i; the lower triangle is the
 /// mirror.
-template <typename S> void minv_world_sweeps(const Model& model, DataTpl<S>& data, const VecX<S>& Dinv) {
+template <typename S> [[gnu::flatten]] void minv_world_sweeps(const Model& model, DataTpl<S>& data, const VecX<S>& Dinv) {
   const int n = model.n;
   auto& Minv = data.Minv;
   // backward: articulated forces of the unit loads, one 6-vector per column
@@ -100,7 +100,7 @@ template <typename S> const MatX<S>& minv_matrix_after_aba(const Model& model, D
 /// loads. Returns data.Minv; leaves data.X_up, oX, oS at q (an aba factorization in data stays
 /// valid only if it was made at the same q).
 template <typename S, typename Q>
-const MatX<S>& minv_matrix(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q) {
+[[gnu::flatten]] const MatX<S>& minv_matrix(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q) {
   IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n, "minv_matrix: q must have size model.n");
   data.passes.kinematics(q);
   const int n = model.n;

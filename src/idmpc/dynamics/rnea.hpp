@@ -12,7 +12,7 @@ namespace detail {
 // RNEA's backward pass from the body forces in data.F: joint torques with armature and passive
 // forces into data.tau, subtree forces accumulated into data.F
 template <typename S, typename Q, typename Vv, typename Aa>
-void rnea_backward(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+[[gnu::flatten]] void rnea_backward(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
   for (int i = model.n - 1; i >= 0; --i) {
     const int p = model.parent[i];
@@ -27,7 +27,7 @@ void rnea_backward(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase
 /// @brief Inverse dynamics τ = ID(q, v, a); q, v, a of size n. Fills data.X_up, V, A, h, vJ
 /// and the subtree forces F (used by rnea_vjp). Returns data.tau.
 template <typename S, typename Q, typename Vv, typename Aa>
-const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+[[gnu::flatten]] const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                     const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
   IDMPC_DEBUG_CHECK(data.n == model.n, "rnea: data was made for a model of another size");
   IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
@@ -63,7 +63,7 @@ const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBas
 /// rnea_vjp, and keeps aba's factorization for minv_apply. Returns data.tau.
 /// Precondition: data holds aba at (q, v) (checked in debug builds).
 template <typename S, typename Q, typename Vv>
-const VecX<S>& rnea_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+[[gnu::flatten]] const VecX<S>& rnea_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                               const Eigen::MatrixBase<Vv>& v) {
   IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n && v.size() == model.n,
                     "rnea_after_aba: q, v must have size model.n");

@@ -39,7 +39,7 @@ namespace detail {
 /// @brief rnea_derivatives; with kJointTransforms = false, data.X_up must already hold the
 /// joint transforms at q (e.g. after aba at q), and they are not recomputed.
 template <bool kJointTransforms, typename S, typename Q, typename Vv, typename Aa>
-void rnea_derivatives_impl(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
+[[gnu::flatten]] void rnea_derivatives_impl(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                            const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
   IDMPC_DEBUG_CHECK(data.n == model.n, "rnea_derivatives: data was made for a model of another size");
   IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,

@@ -21,7 +21,7 @@ namespace idmpc {
 /// builds, as far as data can tell: no algorithm since has overwritten rnea's link velocities
 /// and accelerations (aba) or recomputed the kinematics at another q.
 template <typename S, typename W>
-void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& w) {
+[[gnu::flatten]] void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& w) {
   IDMPC_DEBUG_CHECK(data.n == model.n && w.size() == model.n, "rnea_vjp: w must have size model.n");
   IDMPC_DEBUG_CHECK(data.passes.holds_rnea(),
                     "rnea_vjp needs rnea(model, data, q, v, a) at the point of linearization "
