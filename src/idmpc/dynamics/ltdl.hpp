@@ -6,13 +6,14 @@
 /// sweeps over those entries. This is what MuJoCo's mj_factorM / mj_solveM and Pinocchio's
 /// cholesky::decompose / solve compute.
 ///
-/// The solve is O(n·depth) multiply-adds that do not wait on each other along a row, against
-/// the 6-D transforms that minv_apply carries joint to joint; it pays when one M serves
-/// several right-hand sides. At a new point with one right-hand side (FD adjoint's case),
+/// The solve is O(n·depth) scalar multiply-adds over contiguous memory, against the 6-D
+/// transforms that minv_apply carries joint to joint; it pays when one M serves several
+/// right-hand sides. At a new point with one right-hand side (FD adjoint's case),
 /// minv_apply after aba needs neither M nor its O(n·depth²) factorization.
 ///
 /// Rows are swept as the contiguous index runs of Model::run_start (one run per unbranched
-/// stretch of the tree, the whole row on a chain), so that the inner loops are vector loops.
+/// stretch of the tree, the whole row on a chain), so that the inner loops run over contiguous
+/// memory; a single chain skips the ancestor walk.
 
 #include "idmpc/model/data.hpp"
 
