@@ -33,7 +33,16 @@ struct SweepOptions {
   double duration = 10.0;
   bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
+  bool simd_stages = true;  // false: --no-simd-stages, every run stage by stage (the paper's arithmetic)
 };
+
+// what the tables' matrix mode is, for the tables' headers
+std::string stages_note(const SweepOptions& opt) {
+  return opt.simd_stages ? "Matrix mode runs its stage derivatives in SIMD lanes (the default; `sweep --no-simd-stages` "
+                           "runs every stage one by one, the paper's arithmetic)."
+                         : "Every run evaluates its stages one by one (`--no-simd-stages`): matrix mode is the "
+                           "paper's arithmetic.";
+}
 
 // the real-arm grid: the reach task of every arm in mjcf/arms.json, both formulations
 constexpr const char* kArmsTable = "arms";
@@ -99,6 +108,7 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   task.N = c.N;
   task.kmax = c.kmax;
   if (!arm || opt.duration_given) task.duration = opt.duration;
+  if (!opt.simd_stages) task.simd_stages = false;
   return task;
 }
 
@@ -273,7 +283,8 @@ std::vector<std::string> variants(const std::vector<Cell>& cells) {
 }
 
 // the real-arm tables: time per update with ID/FD, then each run's outcome
-std::string arms_markdown(const std::vector<Cell>& cells, const std::map<std::string, CellResult>& done) {
+std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
+                          const std::map<std::string, CellResult>& done) {
   auto find = [&](const Cell& c) -> const CellResult* {
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
@@ -297,7 +308,7 @@ std::string arms_markdown(const std::vector<Cell>& cells, const std::map<std::st
     << "Each arm's reach task (`mjcf/arms.json`), torque limits from its actuators active in the OCP "
     << "and at the plant. Mean ms per control update; `*` diverged (time averaged until then), "
     << "`°` did not end within " << kReachTolerance << " rad of the target. The last column compares "
-    << "each formulation's fastest variant that reached the target.\n\n| task | n |";
+    << "each formulation's fastest variant that reached the target. " << stages_note(opt) << "\n\n| task | n |";
   for (const auto& mode : modes) o << " FD " << mode << " | ID " << mode << " | ID/FD |";
   o << " best ID / best FD |\n|---|---|";
   for (size_t k = 0; k < modes.size(); ++k) o << "---|---|---|";
@@ -344,7 +355,7 @@ std::string arms_markdown(const std::vector<Cell>& cells, const std::map<std::st
 
 std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
                      const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
-  if (opt.tables == kArmsTable) return arms_markdown(cells, done);
+  if (opt.tables == kArmsTable) return arms_markdown(opt, cells, done);
   auto find = [&](const Cell& c) -> const CellResult* {
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
@@ -371,7 +382,7 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
     << "Closed-loop swing-up, " << opt.duration << " s simulated, MuJoCo plant. "
     << "`*` diverged (time averaged until divergence), `†` ID needed the fallback Q_a "
     << "(the paper's rule). The paper's figures are from " << tables.machine
-    << ": compare ratios, not absolute times.\n";
+    << ": compare ratios, not absolute times. " << stages_note(opt) << "\n";
   const std::vector<std::string> modes = variants(cells);
   for (const std::string& mode : modes) {
     if (opt.tables != "3") {
@@ -438,7 +449,8 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
     };
     o << "\n## Best with best: ID/FD of each formulation's fastest variant that did not diverge\n\n"
       << "Over the variants above; in brackets the ID and the FD variant. The paper's arithmetic is "
-      << "the matrix-mode, single-shooting ratio above.\n";
+      << (opt.simd_stages ? "matrix mode, single shooting, stage by stage: `sweep --no-simd-stages`.\n"
+                          : "the matrix-mode, single-shooting ratio above.\n");
     if (opt.tables != "3") {
       const std::vector<int> Ns = axis(tables, "12", [](const PaperCell& p) { return p.N; });
       const std::vector<int> kmaxs = axis(tables, "12", [](const PaperCell& p) { return p.kmax; });
@@ -575,6 +587,9 @@ void register_sweep(CLI::App& app) {
       sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")
           ->capture_default_str();
   sub->add_flag("--logs", opt->logs, "keep each run's CSV log in the output directory");
+  sub->add_flag("!--no-simd-stages", opt->simd_stages,
+                "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "
+                "the paper's arithmetic");
   sub->callback([opt, duration] {
     opt->duration_given = duration->count() > 0;
     run(*opt);

@@ -733,6 +733,20 @@ TEST_F(Cli, SweepHasAShootingAxis) {
   EXPECT_EQ(again.err.find("ms per update"), std::string::npos) << again.err;
 }
 
+// --no-simd-stages: every run of the sweep stage by stage (matrix mode is then the paper's
+// arithmetic), said in the tables, and part of each cell's settings
+TEST_F(Cli, SweepRunsStageByStageOnRequest) {
+  const Result r = idmpc("sweep --tables 3 --no-simd-stages --duration 0.02 --out paper");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const std::string md = slurp(dir_ / "paper" / "sweep.md");
+  EXPECT_NE(md.find("Every run evaluates its stages one by one (`--no-simd-stages`)"), std::string::npos) << md;
+  // the cells were run with other settings than a default sweep's: resuming with lanes is refused
+  expect_error(idmpc("sweep --tables 3 --duration 0.02 --out paper"), {"sweep.csv", "other settings"});
+  ASSERT_EQ(idmpc("sweep --tables 3 --duration 0.02 --out lanes").code, 0);
+  const std::string lanes = slurp(dir_ / "lanes" / "sweep.md");
+  EXPECT_NE(lanes.find("Matrix mode runs its stage derivatives in SIMD lanes"), std::string::npos) << lanes;
+}
+
 // ---------------------------------------------------------------------------------------------
 // the command line itself: parse errors, --help, --version, numbers
 
