@@ -23,6 +23,7 @@ struct DynamicsFixture {
   const BenchModel* bm = nullptr;
   std::unique_ptr<Data> data;
   VecX<double> q, v, a, tau, w, x;  // x: right-hand side of M⁻¹x; w: RNEA adjoint seed
+  VecX<double> zero, tau_free, qdd;  // BM_FdStageCrbaLtdl's input 0, τ − bias and q̈
   mj::ModelPtr m;  // copy with constraints and actuation off: forces enter as qfrc_applied only
   mj::DataPtr d;
   int n = 0;
@@ -51,6 +52,7 @@ DynamicsFixture& fixture(const std::string& name) {
   f->tau = 10.0 * draw(unit);
   f->w = draw(unit);
   f->x = draw(unit);
+  f->zero = f->tau_free = f->qdd = VecX<double>::Zero(model.n);
 
   // MuJoCo at the same point: constraints and actuation off, ctrl = 0, τ through qfrc_applied
   f->m.reset(mj_copyModel(nullptr, f->bm->m.get()));
@@ -191,12 +193,12 @@ void BM_FdStageCrbaLtdl(benchmark::State& state, const char* name) {
   time_kernel(state, name, [](DynamicsFixture& f) {
     const Model& model = model_of(f);
     Data& data = *f.data;
-    f.w = f.tau - rnea(model, data, f.q, f.v, VecX<double>::Zero(f.n));  // τ − bias (reuses w)
+    f.tau_free = f.tau - rnea(model, data, f.q, f.v, f.zero);
     crba(model, data, f.q);
     ltdl_factor(model, data);
-    f.a = ltdl_solve(model, data, f.w);
+    f.qdd = ltdl_solve(model, data, f.tau_free);
     benchmark::DoNotOptimize(ltdl_solve(model, data, f.x).data());
-    benchmark::DoNotOptimize(rnea(model, data, f.q, f.v, f.a).data());
+    benchmark::DoNotOptimize(rnea(model, data, f.q, f.v, f.qdd).data());
   });
 }
 

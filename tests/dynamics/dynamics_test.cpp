@@ -177,6 +177,17 @@ class DynamicsTest : public ::testing::TestWithParam<Case> {
     return x;
   }
 
+  /// `got` solves M y = x: in residual form up to rounding in M·y, and against a dense
+  /// Cholesky solve up to cond(M)·ε
+  void expect_mass_solve(const MatX<double>& M, const Eigen::LLT<MatX<double>>& llt, const VecX<double>& x,
+                         const VecX<double>& got) const {
+    EXPECT_LE(scaled_error(M * got, x, max_abs(M) * max_abs(got)), kRounding);
+    const VecX<double> expected = llt.solve(x);
+    const double cond_scale = max_abs(M) * max_abs(llt.solve(MatX<double>::Identity(n(), n())));
+    EXPECT_LE(max_abs(got - expected) / (cond_scale * std::max(1.0, max_abs(expected))),
+              kInverseRounding * n());
+  }
+
   std::unique_ptr<Loaded> loaded_;
 };
 
@@ -277,13 +288,7 @@ TEST_P(DynamicsTest, MinvApplyAfterAbaIsMassMatrixSolve) {
     aba(model(), data, s.q, s.v, s.tau);
     for (int r = 0; r < 3; ++r) {
       const VecX<double> x = random_vector(rng, 5.0);
-      const VecX<double> expected = llt.solve(x);
-      const VecX<double> got = minv_apply(model(), data, x);
-      // residual form: M·y = x up to rounding in M·y
-      EXPECT_LE(scaled_error(M * got, x, max_abs(M) * max_abs(got)), kRounding);
-      const double cond_scale = max_abs(M) * max_abs(llt.solve(MatX<double>::Identity(n(), n())));
-      EXPECT_LE(max_abs(got - expected) / (cond_scale * std::max(1.0, max_abs(expected))),
-                kInverseRounding * n());
+      expect_mass_solve(M, llt, x, minv_apply(model(), data, x));
     }
   }
 }
@@ -306,15 +311,10 @@ TEST_P(DynamicsTest, LtdlFactorRebuildsMassMatrixAndSolves) {
     EXPECT_LE(scaled_error(L.transpose() * data.Dl.asDiagonal() * L, M, max_abs(M)), kRounding);
     EXPECT_LE(max_abs(data.Dl.cwiseProduct(data.Dlinv) - VecX<double>::Ones(n())), kRounding);
     const Eigen::LLT<MatX<double>> llt(M);
-    const double cond_scale = max_abs(M) * max_abs(llt.solve(MatX<double>::Identity(n(), n())));
     for (int r = 0; r < 3; ++r) {
       const VecX<double> x = random_vector(rng, 5.0);
-      const VecX<double> expected = llt.solve(x);
       rnea(model(), data, s.q, s.v, s.a);  // other passes leave the factor alone
-      const VecX<double> got = ltdl_solve(model(), data, x);
-      EXPECT_LE(scaled_error(M * got, x, max_abs(M) * max_abs(got)), kRounding);
-      EXPECT_LE(max_abs(got - expected) / (cond_scale * std::max(1.0, max_abs(expected))),
-                kInverseRounding * n());
+      expect_mass_solve(M, llt, x, ltdl_solve(model(), data, x));
     }
   }
 }

@@ -22,8 +22,14 @@ namespace idmpc {
 namespace detail {
 
 /// @brief Calls f(first, count) for each run of consecutive links among the ancestors of i,
-/// nearest run first; together they are exactly the ancestors of i.
-template <typename F> void for_ancestor_runs(const Model& model, int i, F&& f) {
+/// nearest run first; together they are exactly the ancestors of i. `chain`: the model is one
+/// chain (model.run_start[n − 1] == 0), whose ancestors of i are the one run 0 … i − 1, taken
+/// without walking the parents.
+template <typename F> void for_ancestor_runs(const Model& model, bool chain, int i, F&& f) {
+  if (chain) {
+    f(0, i);
+    return;
+  }
   for (int j = model.parent[i]; j >= 0;) {
     const int r = model.run_start[j];
     f(r, j - r + 1);
@@ -41,14 +47,14 @@ template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
   IDMPC_DEBUG_CHECK(data.passes.holds_mass_matrix(),
                     "ltdl_factor needs data.M: call crba or rnea_derivatives first");
   const int n = model.n;
-  const bool chain = model.run_start[n - 1] == 0;  // one chain: the ancestors of k are 0 … k − 1
+  const bool chain = model.run_start[n - 1] == 0;
   auto& Lt = data.Lt;
   // the lower triangle of M at the ancestor entries, row k into column k (M is symmetric)
   for (int k = 0; k < n; ++k) {
     data.Dl[k] = data.M(k, k);
     const S* const mk = data.M.col(k).data();
     S* const lk = Lt.col(k).data();
-    detail::for_ancestor_runs(model, k, [&](int r, int len) {
+    detail::for_ancestor_runs(model, chain, k, [&](int r, int len) {
       for (int t = r; t < r + len; ++t) lk[t] = mk[t];
     });
   }
@@ -64,14 +70,9 @@ template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
       const S a = hki * dk_inv;
       data.Dl[i] -= a * hki;
       S* const li = Lt.col(i).data();
-      const auto eliminate = [&](int r, int len) {
+      detail::for_ancestor_runs(model, chain, i, [&](int r, int len) {
         for (int t = r; t < r + len; ++t) li[t] -= a * lk[t];
-      };
-      if (chain) {
-        eliminate(0, i);
-      } else {
-        detail::for_ancestor_runs(model, i, eliminate);
-      }
+      });
       lk[i] = a;
     }
   }
@@ -86,36 +87,26 @@ const VecX<S>& ltdl_solve(const Model& model, DataTpl<S>& data, const Eigen::Mat
   IDMPC_DEBUG_CHECK(data.n == model.n && x.size() == model.n, "ltdl_solve: x must have size model.n");
   IDMPC_DEBUG_CHECK(data.passes.holds_ltdl(), "ltdl_solve needs ltdl_factor(model, data) first");
   const int n = model.n;
+  const bool chain = model.run_start[n - 1] == 0;
   auto& y = data.y_ltdl;
   S* const yp = y.data();
   for (int k = 0; k < n; ++k) yp[k] = x[k];
   const S* const L = data.Lt.data();  // column k at L + k·n
   // Lᵀz = x: z_k is final once the rows below it are done; it enters its ancestors' rows
-  const auto backward_row = [&](int k, int r, int len) {
+  for (int k = n - 1; k > 0; --k) {
     const S zk = yp[k];
     const S* const lk = L + static_cast<Eigen::Index>(k) * n;
-    for (int t = r; t < r + len; ++t) yp[t] -= zk * lk[t];
-  };
+    detail::for_ancestor_runs(model, chain, k, [&](int r, int len) {
+      for (int t = r; t < r + len; ++t) yp[t] -= zk * lk[t];
+    });
+  }
   // L y = D⁻¹z: y_k takes the ancestors' results, which are final
-  const auto forward_row = [&](int k, int r, int len, S& yk) {
-    const S* const lk = L + static_cast<Eigen::Index>(k) * n;
-    for (int t = r; t < r + len; ++t) yk -= lk[t] * yp[t];
-  };
-  if (model.run_start[n - 1] == 0) {  // one chain: the ancestors of k are 0 … k − 1
-    for (int k = n - 1; k > 0; --k) backward_row(k, 0, k);
-    for (int k = 0; k < n; ++k) {
-      S yk = yp[k] * data.Dlinv[k];
-      forward_row(k, 0, k, yk);
-      yp[k] = yk;
-    }
-    return y;
-  }
-  for (int k = n - 1; k > 0; --k) {
-    detail::for_ancestor_runs(model, k, [&](int r, int len) { backward_row(k, r, len); });
-  }
   for (int k = 0; k < n; ++k) {
+    const S* const lk = L + static_cast<Eigen::Index>(k) * n;
     S yk = yp[k] * data.Dlinv[k];
-    detail::for_ancestor_runs(model, k, [&](int r, int len) { forward_row(k, r, len, yk); });
+    detail::for_ancestor_runs(model, chain, k, [&](int r, int len) {
+      for (int t = r; t < r + len; ++t) yk -= lk[t] * yp[t];
+    });
     yp[k] = yk;
   }
   return y;

@@ -72,7 +72,7 @@ class Model {
   /// derived: the first link of the unbranched run of consecutive links that ends at i, the
   /// smallest r ≤ i with parent[t] = t − 1 for every t in (r, i]. The ancestors of i are then
   /// the runs [run_start[j], j] for j = parent[i], then parent[run_start[j]], …: contiguous
-  /// index ranges (one on a chain), which sparse algorithms sweep as vectors.
+  /// index ranges (one on a chain), which sparse algorithms sweep as contiguous memory.
   const std::vector<int> run_start;
 
   /// @brief Link i as given to the constructor (to rebuild a variant of this model).
