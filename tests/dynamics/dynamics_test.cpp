@@ -1,5 +1,5 @@
-// Our dynamics against MuJoCo (check_model) on every shipped model and on 200 seeded random
-// trees, plus the internal-consistency identities written out directly: CRBA = RNEA columns
+// Our dynamics against MuJoCo (check_model) on every shipped model, on 200 seeded random
+// trees and on 25 with axis-aligned joints (the joint kernels' fast paths, both signs), plus the internal-consistency identities written out directly: CRBA = RNEA columns
 // minus bias, M symmetric positive definite, M·M⁻¹ = I, minv_apply = M⁻¹x, M = LᵀDL,
 // rnea(aba(τ)) = τ, analytic derivatives vs central differences, adjoints vs matrices.
 #include <gtest/gtest.h>
@@ -37,6 +37,7 @@ constexpr double kInverseRounding = 1e-13;
 // central differences with h = ε^(1/3)·max(1,|x|): truncation h²·f'''/6 plus rounding ε·f/h
 constexpr double kFiniteDifference = 1e-6;
 constexpr int kRandomTrees = 200;
+constexpr int kAlignedTrees = 25;  // random trees whose joint axes are all ±e_k
 constexpr int kShippedSeeds = 3;       // (model, seed) pairs per shipped model
 constexpr int kSamplesShipped = 3;     // random states per (shipped model, seed)
 constexpr int kSamplesRandomTree = 2;  // random states per random tree (keeps runtime low)
@@ -47,10 +48,12 @@ struct Case {
   std::string path;   // empty for a random tree
   unsigned seed = 0;  // random tree seed (if any) and seed of the random states
   int samples = 0;
+  bool aligned = false;  // random tree with axis-aligned joints (RandomTreeOptions::aligned_axes)
 };
 
 void PrintTo(const Case& c, std::ostream* os) {
-  *os << c.label << (c.path.empty() ? " (random_tree_mjcf(" + std::to_string(c.seed) + "))"
+  *os << c.label << (c.path.empty() ? " (random_tree_mjcf(" + std::to_string(c.seed) +
+                                          (c.aligned ? ", aligned axes))" : "))")
                                     : " (" + c.path + ", seed " + std::to_string(c.seed) + ")");
 }
 
@@ -80,6 +83,14 @@ std::vector<Case> random_tree_cases() {
   return out;
 }
 
+std::vector<Case> aligned_tree_cases() {
+  std::vector<Case> out;
+  for (unsigned s = 1; s <= kAlignedTrees; ++s) {
+    out.push_back({"aligned_tree_seed" + std::to_string(s), "", s, kSamplesRandomTree, true});
+  }
+  return out;
+}
+
 std::string case_name(const ::testing::TestParamInfo<Case>& info) { return info.param.label; }
 
 struct Loaded {
@@ -88,8 +99,11 @@ struct Loaded {
 };
 
 std::unique_ptr<Loaded> load_case(const Case& c) {
-  mj::ModelPtr m = c.path.empty() ? mj::load_model_from_string(test::random_tree_mjcf(c.seed))
-                                  : mj::load_model(c.path);
+  test::RandomTreeOptions options;
+  options.aligned_axes = c.aligned;
+  mj::ModelPtr m = c.path.empty()
+                       ? mj::load_model_from_string(test::random_tree_mjcf(c.seed, options))
+                       : mj::load_model(c.path);
   Model model = mj::import_model(m.get(), c.label).model;
   return std::make_unique<Loaded>(Loaded{std::move(m), std::move(model)});
 }
@@ -438,6 +452,8 @@ TEST_P(DynamicsTest, RneaAfterAbaIsRneaAtTheAbaResult) {
 
 INSTANTIATE_TEST_SUITE_P(Shipped, DynamicsTest, ::testing::ValuesIn(shipped_cases()), case_name);
 INSTANTIATE_TEST_SUITE_P(RandomTrees, DynamicsTest, ::testing::ValuesIn(random_tree_cases()),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(AlignedTrees, DynamicsTest, ::testing::ValuesIn(aligned_tree_cases()),
                          case_name);
 
 }  // namespace

@@ -76,6 +76,53 @@ TEST(Model, StoresTheLinksAndDerivesTheAxisIndex) {
   }
 }
 
+/// the preorder is a permutation, and the subtree_size[i] positions from preorder_index[i] hold
+/// exactly link i and its descendants
+void expect_subtrees_contiguous_in_preorder(const Model& model) {
+  std::vector<int> sorted = model.preorder;
+  std::sort(sorted.begin(), sorted.end());
+  std::vector<int> identity(static_cast<size_t>(model.n));
+  std::iota(identity.begin(), identity.end(), 0);
+  ASSERT_EQ(sorted, identity) << "preorder is not a permutation of the links";
+  for (int i = 0; i < model.n; ++i) {
+    EXPECT_EQ(model.preorder[model.preorder_index[i]], i);
+    std::vector<int> expected;
+    for (int k = 0; k < model.n; ++k) {
+      int a = k;
+      while (a > i) a = model.parent[a];
+      if (a == i) expected.push_back(k);
+    }
+    std::vector<int> held(model.preorder.begin() + model.preorder_index[i],
+                          model.preorder.begin() + model.preorder_index[i] + model.subtree_size[i]);
+    std::sort(held.begin(), held.end());
+    EXPECT_EQ(held, expected) << "subtree of link " << i;
+  }
+}
+
+TEST(Model, DerivesADepthFirstPreorderWithContiguousSubtrees) {
+  // 0 ← 1 ← 3, 0 ← 2, 2 ← 4, 1 ← 5: breadth-first-like labels, not depth-first
+  std::vector<Link> links(6);
+  const std::vector<int> parents{-1, 0, 0, 1, 2, 1};
+  for (size_t i = 0; i < links.size(); ++i) links[i].parent = parents[i];
+  const Model model(links, Vec3<double>(0, 0, -9.81), "labels");
+  EXPECT_EQ(model.preorder, (std::vector<int>{0, 1, 3, 5, 2, 4}));
+  EXPECT_EQ(model.preorder_index, (std::vector<int>{0, 1, 4, 2, 5, 3}));
+  EXPECT_EQ(model.subtree_size, (std::vector<int>{6, 3, 2, 1, 1, 1}));
+  expect_subtrees_contiguous_in_preorder(model);
+  // two roots, and a depth-first model, whose preorder is the identity
+  const Model chain_and_root(
+      [] {
+        std::vector<Link> l(4);
+        l[1].parent = 0;
+        l[2].parent = 1;
+        return l;
+      }(),
+      Vec3<double>::Zero(), "forest");
+  EXPECT_EQ(chain_and_root.preorder, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(chain_and_root.subtree_size, (std::vector<int>{3, 2, 1, 1}));
+  expect_subtrees_contiguous_in_preorder(chain_and_root);
+}
+
 TEST(Model, RejectsWhatTheAlgorithmsCannotUse) {
   expect_rejected({}, "at least one link");
   std::vector<Link> links = small_tree();
@@ -159,6 +206,11 @@ TEST_P(BreadthFirstOrder, AlgorithmsMatchMujocoOnATreeThatIsNotDepthFirst) {
   const Model model = relabelled(mujoco_order, order);
   ASSERT_TRUE(depth_first(mujoco_order));
   ASSERT_FALSE(depth_first(model)) << "the test needs a tree whose breadth-first order differs";
+  expect_subtrees_contiguous_in_preorder(model);
+  expect_subtrees_contiguous_in_preorder(mujoco_order);
+  std::vector<int> identity(static_cast<size_t>(mujoco_order.n));
+  std::iota(identity.begin(), identity.end(), 0);
+  EXPECT_EQ(mujoco_order.preorder, identity) << "MuJoCo's order is depth-first";
 
   mj::Reference ref(m.get());
   Data data(model), data_mj(mujoco_order);

@@ -103,10 +103,19 @@ void randomize_body(Rng& rng, Body& body) {
   body.inertia = {k * (b * b + c * c), k * (a * a + c * c), k * (a * a + b * b)};
 }
 
-void randomize_joint(Rng& rng, Joint& joint, bool slide) {
+void randomize_joint(Rng& rng, Joint& joint, bool slide, bool aligned) {
   joint.slide = slide;
   joint.pos = rng.box(0.1);
   joint.axis = rng.unit_vector();
+  if (aligned) {
+    size_t k = 0;
+    for (size_t c = 1; c < 3; ++c) {
+      if (std::abs(joint.axis[c]) > std::abs(joint.axis[k])) k = c;
+    }
+    const double sign = joint.axis[k] < 0 ? -1.0 : 1.0;
+    joint.axis = {0, 0, 0};
+    joint.axis[k] = sign;
+  }
   // slides move metres, hinges radians: keep references and spring points moderate for both
   const double span = slide ? 0.1 : 0.6;
   joint.ref = rng.chance(0.5) ? rng.uniform(-span, span) : 0.0;
@@ -262,7 +271,7 @@ std::string random_tree_mjcf(unsigned seed, const RandomTreeOptions& options) {
     body_of[i] = id;
     for (int k = 0; k < counts[i]; ++k, ++dof) {
       Joint j;
-      randomize_joint(rng, j, slide[dof]);
+      randomize_joint(rng, j, slide[dof], options.aligned_axes);
       bodies[id].joints.push_back(j);
     }
   }

@@ -11,6 +11,9 @@ struct RandomTreeOptions {
   int min_dofs = 2;            ///< fewest dofs (>= 1)
   int max_dofs = 12;           ///< most dofs (>= min_dofs)
   bool with_actuators = true;  ///< one motor per dof (random gear in [0.5, 3]) or none at all
+  /// every joint axis ±e_k (the drawn axis's largest component, with its sign), for the joint
+  /// kernels' axis-aligned paths; the same draws as without
+  bool aligned_axes = false;
 };
 
 /// @brief MJCF text of a random fixed-base kinematic tree, identical for a given seed on every

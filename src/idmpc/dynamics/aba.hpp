@@ -22,7 +22,7 @@ template <typename S, typename Q, typename Vv, typename T>
   // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
-    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    joint_transform<S>(model, i, S(q[i]), data.X_up[i]);
     data.vJ[i].setZero();
     add_joint_motion(model, i, S(v[i]), data.vJ[i]);
     data.V[i] = p < 0 ? data.vJ[i] : Vec6<S>(data.X_up[i].apply_motion(data.V[p]) + data.vJ[i]);

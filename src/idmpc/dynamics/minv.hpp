@@ -106,7 +106,7 @@ template <typename S, typename Q>
   const int n = model.n;
   // world placements, axes and body inertias
   for (int i = 0; i < n; ++i) {
-    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    joint_transform<S>(model, i, S(q[i]), data.X_up[i]);
   }
   detail::world_placements(model, data);
   for (int i = 0; i < n; ++i) {

@@ -37,7 +37,7 @@ template <typename S, typename Q, typename Vv, typename Aa>
   // forward pass: link velocities, accelerations and body forces
   for (int i = 0; i < model.n; ++i) {
     const int p = model.parent[i];
-    data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    joint_transform<S>(model, i, S(q[i]), data.X_up[i]);
     data.vJ[i].setZero();
     add_joint_motion<S>(model, i, S(v[i]), data.vJ[i]);
     if (p < 0) {

@@ -51,7 +51,7 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
   // forward pass in the world frame: placements, axes, velocities, accelerations, forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
-    if constexpr (kJointTransforms) data.X_up[i] = joint_transform<S>(model, i, S(q[i]));
+    if constexpr (kJointTransforms) joint_transform<S>(model, i, S(q[i]), data.X_up[i]);
     data.oX[i] = p < 0 ? data.X_up[i] : data.X_up[i] * data.oX[p];
     data.oS[i] = data.oX[i].apply_inverse_motion(motion_subspace<S>(model, i));
     const Vec6<S> vJ = data.oS[i] * v[i];

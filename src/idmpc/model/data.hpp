@@ -113,6 +113,7 @@ template <typename S> struct DataTpl {
         rhs(MatX<S>::Zero(n, n)), Ud_parent(n),
         Lt(MatX<S>::Zero(n, n)), Dl(VecX<S>::Zero(n)), Dlinv(VecX<S>::Zero(n)),
         y_ltdl(VecX<S>::Zero(n)),
+        Fc(SpatialSet<S>::Zero(6, n)),
         passes(n) {}
 
   int n;
@@ -130,7 +131,7 @@ template <typename S> struct DataTpl {
   List<Vec6<S>> pA, U, c, Ud;
   VecX<S> D, Dinv, u;
 
-  // CRBA
+  // CRBA (and its force set Fc, last)
   List<Inertia<S>> Ic;
   MatX<S> M;
 
@@ -175,6 +176,9 @@ template <typename S> struct DataTpl {
   // k of Lt holds row k of L at k's ancestors; D, 1/D; the solve's output
   MatX<S> Lt;
   VecX<S> Dl, Dlinv, y_ltdl;
+
+  // CRBA's force set: column t holds Ic_j·S_j of link j = model.preorder[t] (crba.hpp)
+  SpatialSet<S> Fc;
 
   /// what the buffers above hold (debug builds)
   PassRecord<S> passes;

@@ -13,25 +13,26 @@
 
 namespace idmpc {
 
-/// @brief Parent-to-child transform X_up[i] = XJ(q_i − q_ref_i) · X_tree[i] of link i.
-template <typename S> Transform<S> joint_transform(const Model& model, int i, const S& qi) {
+/// @brief Parent-to-child transform X_up[i] = XJ(q_i − q_ref_i) · X_tree[i] of link i, written
+/// into X (every coefficient, in place: no temporary to copy, whose scattered stores a vector
+/// copy right after would have to wait for).
+template <typename S> void joint_transform(const Model& model, int i, const S& qi, Transform<S>& X) {
   using std::cos;
   using std::sin;
   const Transform<double>& XT = model.X_tree[i];
   const S d = qi - S(model.q_ref[i]);
-  Transform<S> X;
   if (model.joint_type[i] == JointType::kPrismatic) {
     // slide by d along s: origin moves, axes stay
     X.E = XT.E.template cast<S>();
     X.r = XT.r.template cast<S>() + XT.E.transpose().template cast<S>() * (model.axis[i].template cast<S>() * d);
-    return X;
+    return;
   }
   X.r = XT.r.template cast<S>();
   const int k = model.axis_index[i];
   if (k < 0) {
     // rotation by d about a general axis: coordinates map by Rᵀ
     X.E = axis_rotation<S>(model.axis[i].template cast<S>(), d).transpose() * XT.E.template cast<S>();
-    return X;
+    return;
   }
   // rotation about ±e_k mixes only the two other rows of E_tree
   const S angle = d * S(model.axis[i][k]);
@@ -40,7 +41,6 @@ template <typename S> Transform<S> joint_transform(const Model& model, int i, co
   X.E.row(k) = XT.E.row(k).template cast<S>();
   X.E.row(a) = c * XT.E.row(a).template cast<S>() + s * XT.E.row(b).template cast<S>();
   X.E.row(b) = c * XT.E.row(b).template cast<S>() - s * XT.E.row(a).template cast<S>();
-  return X;
 }
 
 /// @brief Spatial acceleration of the base: −gravity, so that gravity enters as inertia.
@@ -101,6 +101,59 @@ template <typename S> S joint_project(const Model& model, int i, const Vec6<S>& 
   const Vec3<S> s = model.axis[i].template cast<S>();
   return model.joint_type[i] == JointType::kRevolute ? S(s.dot(f.template head<3>()))
                                                      : S(s.dot(f.template tail<3>()));
+}
+
+namespace detail {
+/// I·σe_K in the angular (revolute) or linear (prismatic) half, K fixed at compile time so that
+/// the result can stay in registers (a run-time index would send it through memory).
+template <int K, typename S> Vec6<S> inertia_times_axis(const Inertia<S>& I, bool revolute, const S& sg) {
+  constexpr int a = (K + 1) % 3, b = (K + 2) % 3;
+  Vec6<S> out;
+  if (revolute) {
+    out.template head<3>() = sg * I.Ibar.col(K);  // Ibar·σe_K
+    out[3 + K] = S(0);                             // −h × σe_K
+    out[3 + a] = -sg * I.h[b];
+    out[3 + b] = sg * I.h[a];
+  } else {
+    out[K] = S(0);  // h × σe_K
+    out[a] = sg * I.h[b];
+    out[b] = -sg * I.h[a];
+    out.template tail<3>().setZero();
+    out[3 + K] = sg * I.m;
+  }
+  return out;
+}
+}  // namespace detail
+
+/// @brief I·S_i for a spatial inertia I: the force a unit rate of joint i takes on I.
+template <typename S> Vec6<S> inertia_times_motion_subspace(const Model& model, int i,
+                                                            const Inertia<S>& I) {
+  const int k = model.axis_index[i];
+  const bool revolute = model.joint_type[i] == JointType::kRevolute;
+  switch (k) {
+    case 0: return detail::inertia_times_axis<0, S>(I, revolute, S(model.axis[i][0]));
+    case 1: return detail::inertia_times_axis<1, S>(I, revolute, S(model.axis[i][1]));
+    case 2: return detail::inertia_times_axis<2, S>(I, revolute, S(model.axis[i][2]));
+    default: return I.apply(motion_subspace<S>(model, i));
+  }
+}
+
+/// @brief out(t, S_iᵀ·F.col(t)) for each column t in [b, e) of a set F of forces.
+template <typename S, typename Out>
+void project_columns(const Model& model, int i, const SpatialSet<S>& F, int b, int e, Out&& out) {
+  const int half = model.joint_type[i] == JointType::kRevolute ? 0 : 3;
+  const int k = model.axis_index[i];
+  if (k >= 0) {
+    const S sg = S(model.axis[i][k]);
+    const S* f = F.row(half + k).data();
+    for (int t = b; t < e; ++t) out(t, sg * f[t]);
+    return;
+  }
+  const S s0 = S(model.axis[i][0]), s1 = S(model.axis[i][1]), s2 = S(model.axis[i][2]);
+  const S* f0 = F.row(half).data();
+  const S* f1 = F.row(half + 1).data();
+  const S* f2 = F.row(half + 2).data();
+  for (int t = b; t < e; ++t) out(t, s0 * f0[t] + s1 * f1[t] + s2 * f2[t]);
 }
 
 /// @brief row −= S_iᵀ·F for a 6×k block F (k projections at once; row is 1×k).

@@ -4,6 +4,7 @@
 #include <string>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 namespace idmpc {
 namespace {
@@ -72,12 +73,43 @@ std::vector<int> axis_indices(const std::vector<Link>& links) {
   return out;
 }
 
-int count_ancestor_pairs(const std::vector<Link>& links) {
-  int pairs = 0;
-  for (const Link& l : links) {
-    for (int j = l.parent; j >= 0; j = links[static_cast<size_t>(j)].parent) ++pairs;
+// depth-first preorder, children visited in index order; parents come before their children
+std::vector<int> depth_first_preorder(const std::vector<Link>& links) {
+  const int n = static_cast<int>(links.size());
+  std::vector<std::vector<int>> children(links.size());
+  std::vector<int> stack;
+  for (int i = n - 1; i >= 0; --i) {
+    const int p = links[static_cast<size_t>(i)].parent;
+    if (p >= 0) {
+      children[static_cast<size_t>(p)].push_back(i);  // descending: popped ascending
+    } else {
+      stack.push_back(i);
+    }
   }
-  return pairs;
+  std::vector<int> out;
+  out.reserve(links.size());
+  while (!stack.empty()) {
+    const int i = stack.back();
+    stack.pop_back();
+    out.push_back(i);
+    const std::vector<int>& c = children[static_cast<size_t>(i)];
+    stack.insert(stack.end(), c.begin(), c.end());
+  }
+  return out;
+}
+
+std::vector<int> inverse_permutation(const std::vector<int>& order) {
+  std::vector<int> out(order.size());
+  for (size_t t = 0; t < order.size(); ++t) out[static_cast<size_t>(order[t])] = static_cast<int>(t);
+  return out;
+}
+
+std::vector<int> subtree_sizes(const std::vector<Link>& links) {
+  std::vector<int> out(links.size(), 1);
+  for (size_t i = links.size(); i-- > 0;) {
+    if (links[i].parent >= 0) out[static_cast<size_t>(links[i].parent)] += out[i];
+  }
+  return out;
 }
 
 std::vector<int> run_starts(const std::vector<Link>& links) {
@@ -107,8 +139,10 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       joint_names(gather(links, &Link::joint_name)),
       name(std::move(model_name)),
       axis_index(axis_indices(links)),
-      ancestor_pairs(count_ancestor_pairs(links)),
-      run_start(run_starts(links)) {}
+      run_start(run_starts(links)),
+      preorder(depth_first_preorder(links)),
+      preorder_index(inverse_permutation(preorder)),
+      subtree_size(subtree_sizes(links)) {}
 
 Link Model::link(int i) const {
   Link l;

@@ -36,7 +36,7 @@ struct Link {
 /// the fixed base. Any topological order is valid (depth-first is not required).
 ///
 /// The members are the links' fields as arrays, read directly by the algorithms' inner loops,
-/// plus one derived field, axis_index, made once here.
+/// plus derived fields (axis_index, run_start, the depth-first preorder), made once here.
 class Model {
  public:
   /// @brief Checks and stores the tree. Throws std::invalid_argument naming the link for: no
@@ -66,14 +66,16 @@ class Model {
 
   /// derived: k ∈ {0, 1, 2} if axis[i] = ±e_k (the joint transform's fast path), else −1
   const std::vector<int> axis_index;
-  /// derived: Σ_i (number of ancestors of link i), the (i, ancestor) pairs that the
-  /// O(n·depth) algorithms visit
-  const int ancestor_pairs;
   /// derived: the first link of the unbranched run of consecutive links that ends at i, the
   /// smallest r ≤ i with parent[t] = t − 1 for every t in (r, i]. The ancestors of i are then
   /// the runs [run_start[j], j] for j = parent[i], then parent[run_start[j]], …: contiguous
   /// index ranges (one on a chain), which sparse algorithms sweep as contiguous memory.
   const std::vector<int> run_start;
+  /// derived: a depth-first preorder of the links (children in index order): preorder[t] is
+  /// the link at position t, preorder_index[i] the position of link i, and the subtree of link
+  /// i (i and its descendants) occupies the subtree_size[i] consecutive positions from
+  /// preorder_index[i]. On depth-first models (MuJoCo's order) the preorder is the identity.
+  const std::vector<int> preorder, preorder_index, subtree_size;
 
   /// @brief Link i as given to the constructor (to rebuild a variant of this model).
   Link link(int i) const;

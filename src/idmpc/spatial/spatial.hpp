@@ -18,6 +18,9 @@ template <typename S> using Vec6 = Eigen::Matrix<S, 6, 1>;
 template <typename S> using Mat6 = Eigen::Matrix<S, 6, 6>;
 template <typename S> using VecX = Eigen::Matrix<S, Eigen::Dynamic, 1>;
 template <typename S> using MatX = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+/// A set of spatial vectors as the columns of a 6×k matrix stored row by row: each component is
+/// contiguous across the set, so that one transform applies to all of them in vector loops.
+template <typename S> using SpatialSet = Eigen::Matrix<S, 6, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// @brief Skew-symmetric matrix [x]× with [x]× y = x × y.
 template <typename S> Mat3<S> skew(const Vec3<S>& x) {
@@ -123,6 +126,33 @@ template <typename S> struct Transform {
     out.template tail<3>() = fl;
     return out;
   }
+  /// @brief Xᵀ f for each force f in the columns [b, e) of F, in place.
+  void apply_transpose_force_to_columns(SpatialSet<S>& F, int b, int e) const {
+    const S e00 = E(0, 0), e01 = E(0, 1), e02 = E(0, 2), e10 = E(1, 0), e11 = E(1, 1),
+            e12 = E(1, 2), e20 = E(2, 0), e21 = E(2, 1), e22 = E(2, 2);
+    const S r0 = r[0], r1 = r[1], r2 = r[2];
+    S* n0 = F.row(0).data();
+    S* n1 = F.row(1).data();
+    S* n2 = F.row(2).data();
+    S* f0 = F.row(3).data();
+    S* f1 = F.row(4).data();
+    S* f2 = F.row(5).data();
+#pragma GCC ivdep
+    for (int t = b; t < e; ++t) {
+      const S g0 = e00 * f0[t] + e10 * f1[t] + e20 * f2[t];
+      const S g1 = e01 * f0[t] + e11 * f1[t] + e21 * f2[t];
+      const S g2 = e02 * f0[t] + e12 * f1[t] + e22 * f2[t];
+      const S m0 = e00 * n0[t] + e10 * n1[t] + e20 * n2[t];
+      const S m1 = e01 * n0[t] + e11 * n1[t] + e21 * n2[t];
+      const S m2 = e02 * n0[t] + e12 * n1[t] + e22 * n2[t];
+      n0[t] = m0 + r1 * g2 - r2 * g1;
+      n1[t] = m1 + r2 * g0 - r0 * g2;
+      n2[t] = m2 + r0 * g1 - r1 * g0;
+      f0[t] = g0;
+      f1[t] = g1;
+      f2[t] = g2;
+    }
+  }
   /// @brief Composition (this ∘ other): first `other` (A→B), then this (B→C); gives A→C.
   Transform operator*(const Transform& other) const {
     Transform out;
@@ -184,11 +214,17 @@ template <typename S> struct Inertia {
   /// Only the upper triangle is computed (Ibar is symmetric): 45 + 18 multiplications.
   Inertia transformed_to_parent(const Transform<S>& X) const {
     Inertia out;
-    out.m = m;
+    out.m = S(0);
+    add_transformed_to_parent(X, out);
+    return out;
+  }
+  /// @brief out += transformed_to_parent(X), without the intermediate inertia.
+  void add_transformed_to_parent(const Transform<S>& X, Inertia& out) const {
+    out.m += m;
     const Mat3<S>& E = X.E;
     const Vec3<S>& r = X.r;
     const Vec3<S> y = E.transpose() * h;
-    out.h = y + m * r;
+    out.h += y + m * r;
     const Vec3<S> g = y + (S(0.5) * m) * r;
     const S gr2 = S(2) * g.dot(r);
     const Mat3<S> T = Ibar * E;  // Eᵀ Ibar E = Eᵀ T
@@ -196,11 +232,10 @@ template <typename S> struct Inertia {
       for (int b = a; b < 3; ++b) {
         S x = E(0, a) * T(0, b) + E(1, a) * T(1, b) + E(2, a) * T(2, b) - r[a] * g[b] - g[a] * r[b];
         if (a == b) x += gr2;
-        out.Ibar(a, b) = x;
-        out.Ibar(b, a) = x;
+        out.Ibar(a, b) += x;
+        if (b != a) out.Ibar(b, a) += x;
       }
     }
-    return out;
   }
   /// @brief Dense 6×6 matrix.
   Mat6<S> matrix() const {
