@@ -22,10 +22,12 @@ template <typename S, typename Q, typename Vv, typename T>
   // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
-    joint_transform<S>(model, i, S(q[i]), data.X_up[i]);
+    Transform<S> X;
+    joint_transform<S>(model, i, S(q[i]), X);
+    data.X_up[i] = X;
     data.vJ[i].setZero();
     add_joint_motion(model, i, S(v[i]), data.vJ[i]);
-    data.V[i] = p < 0 ? data.vJ[i] : Vec6<S>(data.X_up[i].apply_motion(data.V[p]) + data.vJ[i]);
+    data.V[i] = p < 0 ? data.vJ[i] : Vec6<S>(X.apply_motion(data.V[p]) + data.vJ[i]);
     data.c[i] = cross_motion<S>(data.V[i], data.vJ[i]);
     const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
     data.IA[i] = Ii.matrix();
