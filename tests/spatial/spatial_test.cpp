@@ -234,6 +234,26 @@ TEST_P(SpatialIdentities, InertiaTransformedToParentIsCongruence) {
     Inertia<double> sum = I;
     sum += J;
     EXPECT_LE(max_abs(sum.matrix() - (I.matrix() + J.matrix())), kRounding);
+    // accumulated into another inertia without the intermediate: the same sum
+    Inertia<double> acc = J;
+    I.add_transformed_to_parent(X, acc);
+    EXPECT_LE(max_abs(acc.matrix() - (J.matrix() + expected)), kRounding);
+  }
+}
+
+TEST_P(SpatialIdentities, SetTransformIsTheTransformOfEachColumnInItsRange) {
+  Random rnd(GetParam());
+  for (int s = 0; s < kSamplesPerSeed; ++s) {
+    const Transform<double> X = rnd.transform();
+    SpatialSet<double> F(6, 7);
+    for (int t = 0; t < 7; ++t) F.col(t) = rnd.vec6();
+    const SpatialSet<double> before = F;
+    X.apply_transpose_force_to_columns(F, 2, 6);
+    for (int t = 0; t < 7; ++t) {
+      const V6 f = before.col(t);
+      const V6 expected = t >= 2 && t < 6 ? V6(X.apply_transpose_force(f)) : f;
+      EXPECT_LE(max_abs(V6(F.col(t)) - expected), kRounding) << "column " << t;
+    }
   }
 }
 

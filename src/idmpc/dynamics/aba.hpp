@@ -22,6 +22,8 @@ template <typename S, typename Q, typename Vv, typename T>
   // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
+    // a local transform for the motion transform right below (reading data.X_up back here
+    // timed 2 % slower than the in-place write saves)
     Transform<S> X;
     joint_transform<S>(model, i, S(q[i]), X);
     data.X_up[i] = X;
