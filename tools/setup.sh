@@ -2,7 +2,7 @@
 # Installs idmpc's Debian 12 dependencies (idempotent; needs root or sudo); arguments name extra
 # packages (tools/sanitize.sh: clang).
 set -euo pipefail
-pkgs=(build-essential cmake libmujoco-dev libqhull-dev libeigen3-dev libcli11-dev
+pkgs=(build-essential cmake libmujoco-dev libtinyxml2-dev libqhull-dev libeigen3-dev libcli11-dev
       nlohmann-json3-dev libgtest-dev libbenchmark-dev libosmesa6-dev ffmpeg python3-matplotlib "$@")
 missing=()
 for p in "${pkgs[@]}"; do

@@ -16,9 +16,11 @@ struct CheckOptions {
   int samples = 20;
   unsigned seed = 1;
   bool direct_torque = false;
+  bool actuate_every_joint = false;
 };
 
-void print_summary(const mjModel* m, const mj::ImportedModel& imported) {
+// `actuation_problem`: why the controller could not drive the model as it is ("" if it can)
+void print_summary(const mjModel* m, const mj::ImportedModel& imported, const std::string& actuation_problem) {
   const Model& model = imported.model;
   std::printf("model %s: %d dofs, %d bodies, gravity (%g, %g, %g)\n", model.name.c_str(), model.n,
               m->nbody - 1, model.gravity.x(), model.gravity.y(), model.gravity.z());
@@ -31,9 +33,12 @@ void print_summary(const mjModel* m, const mj::ImportedModel& imported) {
                 model.parent[i], model.I[i].m, hinge ? "rad" : "m", hinge ? "N m" : "N",
                 model.armature[i] || model.damping[i] || model.stiffness[i] ? "  (passive/armature)" : "");
   }
-  std::printf("actuation: %s\n", imported.actuation.direct
-                                     ? "joint torques applied directly (qfrc_applied)"
-                                     : "one motor actuator per joint");
+  if (actuation_problem.empty()) {
+    std::printf("actuation: %s\n", imported.actuation.summary().c_str());
+    for (const auto& n : imported.notices) std::printf("  - %s\n", n.c_str());
+  } else {
+    std::printf("actuation: not usable by the controller as it is (%s)\n", actuation_problem.c_str());
+  }
   if (imported.unmodeled.empty()) {
     std::printf("unmodeled by the controller: nothing\n");
   } else {
@@ -46,12 +51,31 @@ void run(const CheckOptions& opt) {
   if (opt.samples < 1) {
     throw std::invalid_argument("--samples must be at least 1, got " + std::to_string(opt.samples));
   }
-  const mj::ModelPtr m = mj::load_model(opt.model);
-  const mj::ImportedModel imported =
-      mj::import_model(m.get(), opt.model, mj::ImportOptions{opt.direct_torque});
-  print_summary(m.get(), imported);
-  const auto entries = mj::check_model(m.get(), imported.model, opt.samples, opt.seed);
-  const auto simplified = mj::reference_simplifications(m.get());
+  const mj::LoadedModel loaded = mj::load_model_translated(opt.model);
+  const mjModel* m = loaded.model.get();
+  if (!loaded.translations.empty()) std::printf("%s\n", loaded.notice().c_str());
+  mj::ImportOptions options;
+  options.direct_torque = opt.direct_torque;
+  options.actuate_every_joint = opt.actuate_every_joint;
+  options.joint_force_lower = loaded.joint_force_lower;
+  options.joint_force_upper = loaded.joint_force_upper;
+  // the comparison with MuJoCo needs no actuators: actuators the controller cannot use are
+  // reported, not refused (a model the import refuses whatever its actuators is refused)
+  std::string actuation_problem;
+  mj::ImportedModel imported = [&] {
+    try {
+      return mj::import_model(m, opt.model, options);
+    } catch (const std::invalid_argument& e) {
+      mj::ImportOptions direct = options;
+      direct.direct_torque = direct.actuate_every_joint = true;
+      mj::ImportedModel out = mj::import_model(m, opt.model, direct);
+      actuation_problem = e.what();
+      return out;
+    }
+  }();
+  print_summary(m, imported, actuation_problem);
+  const auto entries = mj::check_model(m, imported.model, opt.samples, opt.seed);
+  const auto simplified = mj::reference_simplifications(m);
   if (!simplified.empty()) {
     std::printf("\nMuJoCo reference without what the controller does not model:\n");
     for (const auto& s : simplified) std::printf("  - %s switched off\n", s.c_str());
@@ -85,6 +109,8 @@ void register_check(CLI::App& app) {
   sub->add_option("--seed", opt->seed, "random seed")->capture_default_str();
   sub->add_flag("--direct-torque", opt->direct_torque,
                 "ignore the model's actuators and apply joint torques directly");
+  sub->add_flag("--actuate-every-joint", opt->actuate_every_joint,
+                "let direct torques drive the joints the model has no actuator for (under-actuated models)");
   sub->callback([opt] { run(*opt); });
 }
 

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <stdexcept>
 
 #include "app/atomic_file.hpp"
@@ -24,6 +25,7 @@ constexpr std::size_t kMaxLineBytes = 1 << 20;
 struct DynamicsOptions {
   std::string model, in, out;
   bool direct_torque = false;
+  bool actuate_every_joint = false;
 };
 
 std::string quoted_field(const std::string& field) {
@@ -70,8 +72,14 @@ bool parse_number(const std::string& field, double& x) {
 
 void run(const DynamicsOptions& opt) {
   check_output_paths({{"model", opt.model}, {"--in", opt.in}}, {{"--out", opt.out}});
-  const mj::ModelPtr m = mj::load_model(opt.model);
-  const Model model = mj::import_model(m.get(), opt.model, mj::ImportOptions{opt.direct_torque}).model;
+  const mj::LoadedModel loaded = mj::load_model_translated(opt.model);
+  if (!loaded.translations.empty()) std::cerr << "idmpc: note: " << loaded.notice() << "\n";
+  mj::ImportOptions options;
+  options.direct_torque = opt.direct_torque;
+  options.actuate_every_joint = opt.actuate_every_joint;
+  const mj::ImportedModel imported = mj::import_model(loaded.model.get(), opt.model, options);
+  for (const auto& n : imported.notices) std::cerr << "idmpc: note: " << n << "\n";
+  const Model& model = imported.model;
   const int n = model.n;
   const std::size_t columns = 3 * static_cast<std::size_t>(n);
   std::ifstream in(opt.in, std::ios::binary);
@@ -161,6 +169,8 @@ void register_dynamics(CLI::App& app) {
   sub->add_option("--out", opt->out, "CSV output: tau0..tau{n-1},qacc0..qacc{n-1}")->required();
   sub->add_flag("--direct-torque", opt->direct_torque,
                 "ignore the model's actuators (only their validation)");
+  sub->add_flag("--actuate-every-joint", opt->actuate_every_joint,
+                "accept direct torques on the joints the model has no actuator for (under-actuated models)");
   sub->callback([opt] { run(*opt); });
 }
 

@@ -1,5 +1,6 @@
 #include "app/swingup.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
@@ -8,6 +9,7 @@
 #include <stdexcept>
 
 #include "app/atomic_file.hpp"
+#include "idmpc/experiment/horizon_setup.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 
@@ -60,10 +62,25 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
       [](const Task& s, Task& d) { d.direct_torque = s.direct_torque; });
   sub.add_flag("--fallback", o.fallback,
                "ID: if the run diverges with Qa = 0, rerun it with the task's weights.Qa_fallback (the paper's rule)");
-  add(sub.add_flag("--implicit-damping", t.implicit_damping,
-                   "integrate joint damping implicitly in the horizon (step Tf/N, needs --alpha 0): for heavily "
-                   "damped arms"),
+  add(sub.add_flag("--actuate-every-joint", t.actuate_every_joint,
+                   "with --direct-torque on an under-actuated model: confirm that every joint becomes actuated"),
+      [](const Task& s, Task& d) { d.actuate_every_joint = s.actuate_every_joint; });
+  add(sub.add_option("--implicit-damping", t.implicit_damping,
+                     "integrate joint damping implicitly in the horizon (step Tf/N, needs --alpha 0): on, off, or "
+                     "auto (when the explicit step would be unstable)"),
       [](const Task& s, Task& d) { d.implicit_damping = s.implicit_damping; });
+  add(sub.add_option("--friction-velocity", t.friction_velocity,
+                     "eps of the horizon's smooth friction f*tanh(v/eps): scalar or one per joint (default: auto)"),
+      [](const Task& s, Task& d) { d.friction_velocity = s.friction_velocity; });
+  add(sub.add_option("--offset-free", t.offset_free,
+                     "true: estimate the torque the model misses (disturbance observer) and add it to the horizon"),
+      [](const Task& s, Task& d) { d.offset_free = s.offset_free; });
+  add(sub.add_option("--observer-time-constant", t.observer_time_constant,
+                     "time constant of the disturbance observer's filter [s]"),
+      [](const Task& s, Task& d) { d.observer_time_constant = s.observer_time_constant; });
+  add(sub.add_option("--reach-tolerance", t.reach_tolerance,
+                     "the target is reached when max|q - qref| at the end is below this"),
+      [](const Task& s, Task& d) { d.reach_tolerance = s.reach_tolerance; });
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
                    "evaluate the horizon stages one by one instead of in SIMD lanes (ID; FD matrix; FD "
                    "adjoint under multiple shooting): the paper's arithmetic"),
@@ -81,14 +98,28 @@ Task make_task(const TaskOverrides& o) {
 
 namespace {
 
+// MuJoCo's friction loss per dof, zero where the model disables it
+VecX<double> friction_loss(const mjModel* m) {
+  VecX<double> f = VecX<double>::Zero(m->nv);
+  if (m->opt.disableflags & (mjDSBL_FRICTIONLOSS | mjDSBL_CONSTRAINT)) return f;
+  for (int i = 0; i < m->nv; ++i) f[i] = m->dof_frictionloss[i];
+  return f;
+}
+
 SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   // validate everything before any output is opened
-  const mj::ModelPtr m = mj::load_model(task.model);
-  const mj::ImportedModel imported = mj::import_model(m.get(), task.model, mj::ImportOptions{task.direct_torque});
+  const mj::LoadedModel loaded = mj::load_model_translated(task.model);
+  const mjModel* m = loaded.model.get();
+  mj::ImportOptions import_options;
+  import_options.direct_torque = task.direct_torque;
+  import_options.actuate_every_joint = task.actuate_every_joint;
+  import_options.joint_force_lower = loaded.joint_force_lower;
+  import_options.joint_force_upper = loaded.joint_force_upper;
+  const mj::ImportedModel imported = mj::import_model(m, task.model, import_options);
   const Model& model = imported.model;
   const int n = model.n;
   ResolvedTask r = resolve(task, n);
-  if (r.q0.size() == 0) r.q0 = mj::keyframe_qpos(m.get(), task.q0_rule, task.model);
+  if (r.q0.size() == 0) r.q0 = mj::keyframe_qpos(m, task.q0_rule, task.model);
 
   // the actuators' ranges, narrowed by the task's limit: constraints of the OCP (DESIGN §8)
   // and the clamp of every torque the plant receives
@@ -96,25 +127,43 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   const VecX<double> upper = imported.actuation.torque_upper.cwiseMin(r.torque_limit);
   const bool limited = (lower.array().isFinite() || upper.array().isFinite()).any();
   const TorqueLimits limits = limited ? TorqueLimits{lower, upper} : TorqueLimits{};
-  // the horizon's model: the plant's, or with its damping integrated implicitly over T_f/N
-  std::optional<Model> implicit;
-  if (task.implicit_damping) implicit.emplace(with_implicit_damping(model, r.cgmres.Tf / task.N));
-  Controller controller(OcpProblem(implicit ? *implicit : model, r.formulation, r.derivatives, r.weights, r.qref,
+  // the horizon's model (the plant's passive forces, DESIGN §10) and the "auto" weights, the
+  // same for both formulations
+  mj::Plant plant(m, imported.actuation);
+  const std::string timestep_warning = plant.set_control_period(r.cgmres.dt);
+  const HorizonSetup setup =
+      setup_horizon(task, r, model, friction_loss(m), lower, upper, plant.timestep());
+  Controller controller(OcpProblem(setup.horizon_model, r.formulation, r.derivatives, setup.weights, r.qref,
                                    task.N, limits),
-                        r.cgmres, &model);
+                        r.cgmres, &setup.plant_model);
   controller.nlp().set_stage_batching(task.simd_stages);
   controller.set_torque_limits(lower, upper);
-  mj::Plant plant(m.get(), imported.actuation);
-  // what the run does not model or had to change, said before it starts
+  controller.set_disturbance_observer(task.offset_free ? task.observer_time_constant : 0.0);
+  // what the run does not model, had to change or chose by itself, said before it starts
+  std::vector<std::string> notices;
+  if (!loaded.translations.empty()) notices.push_back(loaded.notice());
+  notices.insert(notices.end(), imported.notices.begin(), imported.notices.end());
+  notices.insert(notices.end(), setup.notes.begin(), setup.notes.end());
   std::vector<std::string> warnings = r.warnings;
+  std::vector<std::string> unbounded;
+  for (int j = 0; j < n; ++j) {
+    if (!std::isfinite(lower[j]) && !std::isfinite(upper[j])) unbounded.push_back(model.joint_names[j]);
+  }
+  if (!unbounded.empty()) {
+    std::string list;
+    for (const auto& j : unbounded) list += (list.empty() ? "'" : ", '") + j + "'";
+    warnings.push_back("no torque limit is declared for joint(s) " + list +
+                       ": their torques are unbounded (give --torque-limit or the actuators' forcerange)");
+  }
   if (!imported.unmodeled.empty()) {
     std::string list;
     for (const auto& f : imported.unmodeled) list += (list.empty() ? "" : "; ") + f;
     warnings.push_back("the plant has features the controller does not model: " + list);
   }
-  for (const auto& w : mj::range_violations(m.get(), r.q0, "q0")) warnings.push_back(w);
-  for (const auto& w : mj::range_violations(m.get(), r.qref, "qref")) warnings.push_back(w);
-  if (std::string w = plant.set_control_period(r.cgmres.dt); !w.empty()) warnings.push_back(w);
+  for (const auto& w : mj::range_violations(m, r.q0, "q0")) warnings.push_back(w);
+  for (const auto& w : mj::range_violations(m, r.qref, "qref")) warnings.push_back(w);
+  if (!timestep_warning.empty()) warnings.push_back(timestep_warning);
+  for (const auto& w : notices) std::cerr << "idmpc: " << w << "\n";
   for (const auto& w : warnings) std::cerr << "idmpc: warning: " << w << "\n";
   mj::ClosedLoopSettings ls;
   ls.duration = task.duration;
@@ -158,13 +207,25 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   s.final_v_norm = result.final_v_norm;
   s.mean_residual = result.mean_residual;
   s.unmodeled = imported.unmodeled;
+  s.notices = notices;
   s.warnings = warnings;
+  s.reached = !s.diverged && s.final_q_error < task.reach_tolerance;
+  s.contact_steps = result.contact_steps;
+  s.max_contact_force = result.max_contact_force;
+  s.final_disturbance.assign(result.final_disturbance.data(),
+                             result.final_disturbance.data() + result.final_disturbance.size());
+  s.implicit_damping = setup.implicit_damping;
+  s.friction_velocity.assign(setup.friction_velocity.data(), setup.friction_velocity.data() + n);
+  s.Qq.assign(setup.weights.Qq.data(), setup.weights.Qq.data() + n);
+  s.Qv.assign(setup.weights.Qv.data(), setup.weights.Qv.data() + n);
+  s.R.assign(setup.weights.R.data(), setup.weights.R.data() + n);
+  s.unbounded_joints = unbounded;
   s.torque_lower.assign(lower.data(), lower.data() + n);
   s.torque_upper.assign(upper.data(), upper.data() + n);
   s.saturated_steps = result.saturated_steps;
   s.saturated_any = result.saturated_any;
   s.max_constraint_violation = result.max_constraint_violation;
-  if (s.diverged) s.divergence_hint = divergence_hint(task);
+  if (s.diverged) s.divergence_hint = divergence_hint(task, setup.damping_step_ratio);
   s.model_hash = file_hash(task.model);  // render checks a log's model and summary by these
   s.log_hash = file_hash(log_path);
   return SwingupOutcome{std::move(result), std::move(s)};
@@ -212,6 +273,19 @@ std::string human_summary(const RunSummary& s) {
   o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
   o << "  final max|q - qref| = " << s.final_q_error << ", |v| = " << s.final_v_norm
     << ", mean residual " << s.mean_residual << "\n";
+  o << "  target " << (s.reached ? "REACHED" : "NOT reached") << " (max|q - qref| < " << s.task.reach_tolerance
+    << " at the end)\n";
+  if (!s.final_disturbance.empty() && s.task.offset_free) {
+    double largest = 0;
+    for (double d : s.final_disturbance) largest = std::max(largest, std::abs(d));
+    o << "  offset-free tracking: estimated unmodeled torque up to " << largest << " at the end\n";
+  }
+  o << "  contacts on " << s.contact_steps << " of " << s.steps << " steps";
+  if (s.contact_steps > 0) o << ", largest normal force " << s.max_contact_force << " N";
+  o << "\n";
+  if (!s.unbounded_joints.empty()) {
+    o << "  no torque limit declared for " << s.unbounded_joints.size() << " joint(s): torques unbounded\n";
+  }
   if (s.saturated_any > 0) {
     o << "  torque saturated on " << s.saturated_any << " of " << s.steps << " steps (per joint:";
     for (long k : s.saturated_steps) o << ' ' << k;

@@ -70,16 +70,58 @@ TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
   EXPECT_EQ(fs::path(t.model), fs::path(path).parent_path() / "robots/my_arm.xml");
   EXPECT_EQ(t.formulation, "fd");
   EXPECT_EQ(t.N, 10);
-  EXPECT_EQ(t.kmax, paper_task().kmax);        // from the base
-  EXPECT_EQ(t.Qq, paper_task().Qq);
+  EXPECT_EQ(t.kmax, arm_defaults().kmax);       // from the base: the defaults for real arms
+  EXPECT_TRUE(t.Qq.empty());                   // "auto", resolved with the model
+  EXPECT_TRUE(t.offset_free);
+  EXPECT_EQ(t.implicit_damping, "auto");
   const ResolvedTask r = resolve(t, 2);
+  EXPECT_EQ(r.weights.Qq.size(), 0);
   EXPECT_EQ(r.q0, (VecX<double>(2) << 0.1, 0.2).finished());
   EXPECT_EQ(r.weights.R, (VecX<double>(2) << 0.01, 0.02).finished());
   EXPECT_EQ(r.formulation, Formulation::kForwardDynamics);
   EXPECT_TRUE(r.cgmres.init_full_horizon);
   EXPECT_EQ(r.cgmres.alpha, 0.0);
   // and it survives the round trip through a summary's task
-  EXPECT_TRUE(task_from_json(to_json(t), "round trip", Task{}).init_full_horizon);
+  const Task back = task_from_json(to_json(t), "round trip", Task{});
+  EXPECT_TRUE(back.init_full_horizon);
+  EXPECT_TRUE(back.Qq.empty());
+  EXPECT_EQ(back.R, t.R);
+  EXPECT_EQ(back.implicit_damping, "auto");
+  EXPECT_EQ(back.offset_free, t.offset_free);
+  EXPECT_EQ(back.reach_tolerance, t.reach_tolerance);
+}
+
+// a user's file that names only the model, q0 and q_ref takes everything else from the defaults
+// for real arms; the paper's task names every field itself and runs without offset-free tracking
+TEST(TaskFile, AMinimalFileTakesTheDefaultsForRealArmsAndThePaperStatesItsOwn) {
+  TempDir dir;
+  const Task t = load_task(dir.write("min.json", R"({"model": "arm.xml", "q0": "home", "qref": [0.1, 0.2]})"));
+  const Task& d = arm_defaults();
+  EXPECT_EQ(t.q0_rule, "home");
+  EXPECT_EQ(t.N, d.N);
+  EXPECT_EQ(t.duration, d.duration);
+  EXPECT_TRUE(t.init_full_horizon);
+  EXPECT_EQ(t.alpha, 0.0);
+  EXPECT_TRUE(t.offset_free);
+  EXPECT_GT(t.observer_time_constant, 0.0);
+  EXPECT_EQ(t.implicit_damping, "auto");
+  EXPECT_TRUE(t.friction_velocity.empty());
+  EXPECT_EQ(t.reach_tolerance, 5e-3);
+  const Task& p = paper_task();
+  EXPECT_FALSE(p.offset_free);
+  EXPECT_EQ(p.implicit_damping, "off");
+  EXPECT_FALSE(p.Qq.empty());
+  EXPECT_FALSE(p.R.empty());
+  EXPECT_EQ(p.alpha, 1.0);
+  // weights may be "auto" by name, and anything else that is a string is refused
+  const Task a = load_task(dir.write("auto.json", R"({"weights": {"R": "auto", "Qq": 5}})"));
+  EXPECT_TRUE(a.R.empty());
+  EXPECT_EQ(a.Qq, std::vector<double>{5});
+  EXPECT_NE(message_of([&] { load_task(dir.write("bad.json", R"({"weights": {"R": "big"}})")); }).find("'R'"),
+            std::string::npos);
+  EXPECT_NE(message_of([&] { load_task(dir.write("bad2.json", R"({"implicit_damping": "yes"})")); })
+                .find("'implicit_damping'"),
+            std::string::npos);
 }
 
 TEST(TaskFile, BadFilesNameFileAndField) {

@@ -67,6 +67,12 @@ VecX<double> random_vector(std::mt19937& rng, int n, double scale) {
   return x;
 }
 
+mj::ImportOptions direct_torques() {
+  mj::ImportOptions options;
+  options.direct_torque = true;
+  return options;
+}
+
 double rel(const VecX<double>& x, const VecX<double>& y) {
   return mj::relative_error(x, y);
 }
@@ -181,18 +187,97 @@ TEST_F(ImportTest, UnderActuatedModelIsRejectedNamingTheBareJoint) {
   const mj::ModelPtr m = mj::load_model_from_string(
       chain_mjcf("", R"(<motor name="m0" joint="j0"/><motor name="m2" joint="j2"/>)"));
   expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "under.xml"); },
-                                             {"under-actuated", "'j1'", "link1", "under.xml", "--direct-torque"});
+                                             {"under-actuated", "'j1'", "link1", "under.xml", "--direct-torque",
+                                              "--actuate-every-joint"});
 }
 
-TEST_F(ImportTest, NonMotorActuatorIsRejectedUnlessTorquesAreDirect) {
-  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
-      "", R"(<motor name="m0" joint="j0"/><position name="servo1" joint="j1" kp="20"/>
-             <motor name="m2" joint="j2"/>)"));
-  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "servo.xml"); },
-                                             {"servo1", "motor", "servo.xml", "--direct-torque"});
-  const mj::ImportedModel imported = mj::import_model(m.get(), "servo.xml", mj::ImportOptions{true});
+// direct torques would drive the joints the model leaves without an actuator: only on request
+TEST_F(ImportTest, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
+  // an acrobot: the shoulder is passive
+  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco model="acrobot">
+  <worldbody>
+    <body name="upper_arm" pos="0 0 2">
+      <joint name="shoulder" type="hinge" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.05" mass="1" contype="0" conaffinity="0"/>
+      <body name="lower_arm" pos="0 0 -1">
+        <joint name="elbow" type="hinge" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.049" mass="1" contype="0" conaffinity="0"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor name="elbow" joint="elbow" gear="2" ctrllimited="true" ctrlrange="-1 1"/></actuator>
+</mujoco>)");
+  mj::ImportOptions options = direct_torques();
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "acrobot.xml", options); },
+                                             {"under-actuated", "joint 'shoulder' of body 'upper_arm'",
+                                              "acrobot.xml", "--actuate-every-joint"});
+  options.actuate_every_joint = true;
+  const mj::ImportedModel imported = mj::import_model(m.get(), "acrobot.xml", options);
   EXPECT_TRUE(imported.actuation.direct);
-  EXPECT_EQ(imported.model.n, 3);
+  EXPECT_EQ(imported.actuation.unactuated_joints, std::vector<std::string>{"shoulder"});
+  // the notice says so, and direct torques have no declared bound
+  ASSERT_EQ(imported.notices.size(), 1u) << joined(imported.notices);
+  EXPECT_NE(imported.notices[0].find("'shoulder'"), std::string::npos) << imported.notices[0];
+  EXPECT_EQ(imported.actuation.unbounded_joints, (std::vector<std::string>{"shoulder", "elbow"}));
+  // a fully actuated model needs no confirmation
+  const mj::ModelPtr full = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor joint="j0"/><motor joint="j1"/><motor joint="j2"/>)"));
+  EXPECT_NO_THROW(mj::import_model(full.get(), "full.xml", direct_torques()));
+}
+
+// servos are replaced by joint torques bounded by their force ranges; their control ranges are
+// positions and velocities, no torques
+TEST_F(ImportTest, ServosAreReplacedByJointTorquesLimitedByTheirForceRange) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor name="m0" joint="j0" gear="2" ctrllimited="true" ctrlrange="-1 1.5"/>
+             <position name="servo1" joint="j1" kp="20" gear="-3" ctrllimited="true" ctrlrange="-0.1 0.1"
+                       forcelimited="true" forcerange="-5 4"/>
+             <velocity name="servo2" joint="j2" kv="3"/>)"));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "servo.xml");
+  const mj::Actuation& act = imported.actuation;
+  EXPECT_TRUE(act.direct);
+  EXPECT_EQ(act.replaced_servos, (std::vector<std::string>{"servo1", "servo2"}));
+  const double inf = std::numeric_limits<double>::infinity();
+  // motor: ctrl range × gain × gear; servo1: force range × gear (flipped); servo2: none
+  EXPECT_EQ(act.torque_lower, (VecX<double>(3) << -2, -12, -inf).finished());
+  EXPECT_EQ(act.torque_upper, (VecX<double>(3) << 3, 15, inf).finished());
+  EXPECT_EQ(act.unbounded_joints, std::vector<std::string>{"j2"});
+  ASSERT_EQ(imported.notices.size(), 1u) << joined(imported.notices);
+  for (const std::string part : {"position and velocity servos 'servo1', 'servo2' replaced by joint torques",
+                                 "forcerange × gear of 'servo1'", "'servo2' declare no forcerange"}) {
+    EXPECT_NE(imported.notices[0].find(part), std::string::npos) << "lacks '" << part << "': " << imported.notices[0];
+  }
+  EXPECT_NE(act.summary().find("no torque limit declared for joint(s) 'j2'"), std::string::npos) << act.summary();
+  // the joint's own torque range (actuatorfrcrange of a joint no actuator drives) bounds it too
+  mj::ImportOptions options;
+  options.joint_force_lower = {-inf, -inf, -7};
+  options.joint_force_upper = {inf, inf, 6};
+  const mj::ImportedModel ranged = mj::import_model(m.get(), "servo.xml", options);
+  EXPECT_EQ(ranged.actuation.torque_lower[2], -7);
+  EXPECT_EQ(ranged.actuation.torque_upper[2], 6);
+  EXPECT_TRUE(ranged.actuation.unbounded_joints.empty());
+  // torques applied directly on request: no replacement reported
+  const mj::ImportedModel direct = mj::import_model(m.get(), "servo.xml", direct_torques());
+  EXPECT_TRUE(direct.actuation.direct);
+  EXPECT_TRUE(direct.actuation.replaced_servos.empty());
+  EXPECT_EQ(direct.model.n, 3);
+}
+
+TEST_F(ImportTest, MusclesAreRefusedAndServosOnAnUnderActuatedModelNeedTheConfirmation) {
+  const mj::ModelPtr muscle = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor name="m0" joint="j0"/><motor name="m1" joint="j1"/>
+             <muscle name="biceps" joint="j2" lengthrange="0.1 1"/>)"));
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(muscle.get(), "muscle.xml"); },
+                                             {"'biceps'", "neither a motor nor a servo", "--direct-torque"});
+  const mj::ModelPtr servos = mj::load_model_from_string(
+      chain_mjcf("", R"(<position name="s0" joint="j0" kp="10"/><position name="s2" joint="j2" kp="10"/>)"));
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(servos.get(), "servos.xml"); },
+                                             {"under-actuated", "'j1'", "servos are replaced", "--actuate-every-joint"});
+  mj::ImportOptions options;
+  options.actuate_every_joint = true;
+  const mj::ImportedModel imported = mj::import_model(servos.get(), "servos.xml", options);
+  EXPECT_EQ(imported.actuation.replaced_servos, (std::vector<std::string>{"s0", "s2"}));
+  EXPECT_EQ(imported.actuation.unactuated_joints, std::vector<std::string>{"j1"});
 }
 
 TEST_F(ImportTest, TendonActuatorIsRejected) {
@@ -278,16 +363,20 @@ TEST_F(ImportTest, ActuatorRangesBecomeTorqueLimits) {
   EXPECT_EQ(motors.actuation.torque_lower, (VecX<double>(3) << -2, -12, -inf).finished());
   EXPECT_EQ(motors.actuation.torque_upper, (VecX<double>(3) << 3, 15, inf).finished());
   // torques applied directly bypass the actuators and their ranges
-  const mj::ImportedModel direct = mj::import_model(m.get(), "ranges.xml", mj::ImportOptions{true});
+  const mj::ImportedModel direct = mj::import_model(m.get(), "ranges.xml", direct_torques());
   EXPECT_TRUE(direct.unmodeled.empty());
   EXPECT_EQ(direct.actuation.torque_upper, VecX<double>::Constant(3, inf));
 }
 
 TEST_F(ImportTest, ShippedAndRandomModelsHaveNothingUnmodeled) {
-  // they are written for the controller: no contacts, tendons, friction loss... The real arms
-  // (mjcf/panda.xml, ...) keep their joint ranges, a plant feature (their torque limits, the
-  // actuators' control ranges, the controller models); the paper's models have neither.
-  const auto allowed = [](const std::string& item) { return item.rfind("limit on joint ", 0) == 0; };
+  // the paper's models are written for the controller: no contacts, tendons, friction loss...
+  // The real arms (mjcf/panda.xml, ...) keep their joint ranges, and those published for MuJoCo 3
+  // (mjcf/fr3.xml, ...) their collision geoms and joint friction: plant features the controller
+  // does not model (their torque limits, from the actuators, it models)
+  const auto allowed = [](const std::string& item) {
+    return item.rfind("limit on joint ", 0) == 0 || item.rfind("contacts (", 0) == 0 ||
+           item.rfind("friction loss on joint ", 0) == 0;
+  };
   for (const std::string& path : test::shipped_model_paths()) {
     const mj::ModelPtr m = mj::load_model(path);
     const mj::ImportedModel imported = mj::import_model(m.get(), path);
@@ -529,7 +618,7 @@ TEST_F(ImportTest, PlantWithDirectTorquesAppliesTau) {
 TEST_F(ImportTest, PlantWithDirectTorquesIgnoresTheModelsServos) {
   const mj::ModelPtr m = mj::load_model_from_string(plant_mjcf(
       R"(<position joint="j0" kp="50"/><position joint="j1" kp="50"/><velocity joint="j2" kv="3"/>)"));
-  const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml", mj::ImportOptions{true});
+  const mj::ImportedModel imported = mj::import_model(m.get(), "plant.xml", direct_torques());
   ASSERT_TRUE(imported.actuation.direct);
   expect_plant_applies_torques(m.get(), imported.actuation, "servos, direct torques");
 }
@@ -664,9 +753,9 @@ class LoaderTest : public ImportTest {
 TEST_F(LoaderTest, NewerMujocoAttributesValuesAndElementsAreNamed) {
   const std::string version = mj_versionString();
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {R"(<option integrator="implicitfast"/>)", "value 'implicitfast' (<option>, line 3)"},
-      {R"(<compiler assetdir="assets"/>)", "attribute 'assetdir' (<compiler>, line 3)"},
-      {R"(<replicate count="2"/>)", "element <replicate> (line 3)"}};
+      {R"(<compiler maxhullvert="8"/>)", "attribute 'maxhullvert' (<compiler>, line 3)"},
+      {R"(<option><flag eulerdamp="disable"/></option>)", "attribute 'eulerdamp' (<flag>, line 3)"},
+      {R"(<replicate count="2"/>)", "element <replicate>, line 3"}};
   for (const auto& [assets, needle] : cases) {
     SCOPED_TRACE(assets);
     const std::string message = load_error(model_with(assets));

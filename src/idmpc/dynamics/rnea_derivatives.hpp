@@ -102,7 +102,7 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
     }
     const ArmaturePassivePartials d = armature_passive_partials(model, i);
     data.dtau_dq(i, i) += d.dq;
-    data.dtau_dv(i, i) += d.dv;
+    data.dtau_dv(i, i) += d.dv + friction_slope<S>(model, i, S(v[i]));
     data.M(i, i) += d.da;
   }
 }

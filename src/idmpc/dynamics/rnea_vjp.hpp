@@ -50,8 +50,9 @@ template <typename S, typename W>
     // joint inputs, with armature, damping and stiffness
     const ArmaturePassivePartials d = armature_passive_partials(model, i);
     data.g_a[i] = Si.dot(data.abar[i]) + d.da * w[i];
-    data.g_v[i] = Si.dot(data.vbar[i]) + data.abar[i].dot(cross_motion<S>(data.V[i], Si)) +
-                  d.dv * w[i];
+    // the joint velocity from vJ = S v (S of unit norm) for the friction's slope
+    const S dv = d.dv + friction_slope<S>(model, i, joint_project<S>(model, i, data.vJ[i]));
+    data.g_v[i] = Si.dot(data.vbar[i]) + data.abar[i].dot(cross_motion<S>(data.V[i], Si)) + dv * w[i];
     // joint angle through X_i in a_i = X_i a_λ + … and v_i = X_i v_λ + …; (X_i a_λ) × S_i
     // equals (a_i − v_i × S_i q̇_i) × S_i since S_i × S_i = 0
     const Vec6<S> Xa = data.A[i] - cross_motion<S>(data.V[i], data.vJ[i]);

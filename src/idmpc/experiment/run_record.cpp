@@ -309,7 +309,16 @@ nlohmann::json to_json(const RunSummary& s) {
   j["final_q_error"] = s.final_q_error;
   j["final_v_norm"] = s.final_v_norm;
   j["mean_residual"] = s.mean_residual;
+  j["reached"] = s.reached;
+  j["contact_steps"] = s.contact_steps;
+  j["max_contact_force"] = s.max_contact_force;
+  j["final_disturbance"] = s.final_disturbance;
+  j["implicit_damping"] = s.implicit_damping;
+  j["friction_velocity"] = s.friction_velocity;
+  j["weights"] = {{"Qq", s.Qq}, {"Qv", s.Qv}, {"R", s.R}};
+  j["unbounded_joints"] = s.unbounded_joints;
   j["unmodeled"] = s.unmodeled;
+  j["notices"] = s.notices;
   j["warnings"] = s.warnings;
   // infinite limits (unbounded joints) are written as null
   auto limits = [](const std::vector<double>& x) {
@@ -369,7 +378,21 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.final_q_error = j.at("final_q_error").get<double>();
     s.final_v_norm = j.at("final_v_norm").get<double>();
     s.mean_residual = j.at("mean_residual").get<double>();
+    // absent in summaries written before they existed
+    s.reached = j.value("reached", false);
+    s.contact_steps = j.value("contact_steps", 0L);
+    s.max_contact_force = j.value("max_contact_force", 0.0);
+    s.final_disturbance = j.value("final_disturbance", std::vector<double>{});
+    s.implicit_damping = j.value("implicit_damping", false);
+    s.friction_velocity = j.value("friction_velocity", std::vector<double>{});
+    if (j.contains("weights")) {
+      s.Qq = j.at("weights").at("Qq").get<std::vector<double>>();
+      s.Qv = j.at("weights").at("Qv").get<std::vector<double>>();
+      s.R = j.at("weights").at("R").get<std::vector<double>>();
+    }
+    s.unbounded_joints = j.value("unbounded_joints", std::vector<std::string>{});
     s.unmodeled = j.at("unmodeled").get<std::vector<std::string>>();
+    s.notices = j.value("notices", std::vector<std::string>{});
     s.warnings = j.at("warnings").get<std::vector<std::string>>();
     auto limits = [&](const char* key, double unbounded) {
       std::vector<double> x;

@@ -57,7 +57,19 @@ struct RunSummary {
   long saturated_any = 0;                          ///< steps with any joint clamped
   /// @brief Largest excess of the OCP solution's stage torques over their bounds [N m]
   double max_constraint_violation = 0;
+  /// @brief Whether the target was reached: max|q − q_ref| at the end below task.reach_tolerance,
+  /// without divergence
+  bool reached = false;
+  long contact_steps = 0;          ///< control steps with a contact in the plant
+  double max_contact_force = 0;    ///< the largest contact normal force [N]
+  std::vector<double> final_disturbance;  ///< the observer's d̂ at the end (offset-free tracking)
+  bool implicit_damping = false;   ///< whether the horizon integrated damping implicitly
+  std::vector<double> friction_velocity;  ///< ε of the horizon's smooth friction (0: none)
+  std::vector<double> Qq, Qv, R;   ///< the weights as run ("auto" resolved)
+  std::vector<std::string> unbounded_joints;  ///< joints without a declared torque limit
   std::vector<std::string> unmodeled;
+  /// @brief said at the start: what loading translated or replaced, what was chosen automatically
+  std::vector<std::string> notices;
   std::vector<std::string> warnings;  ///< said at the start: unmodeled features, ranges, timestep
   /// @brief file_hash() of the model file as run, and of the log as written ("" in summaries
   /// written before these fields existed, and for a log that is no regular file)

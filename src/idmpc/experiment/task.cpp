@@ -81,6 +81,16 @@ struct Reader {
     }
     x = out;
   }
+  // a scalar, a list of numbers, or "auto" (then empty)
+  void get_or_auto(const char* key, std::vector<double>& x) const {
+    if (!has(key)) return;
+    if (j.at(key).is_string()) {
+      if (j.at(key) != "auto") bad(key, "a number, a list of numbers or \"auto\"");
+      x.clear();
+      return;
+    }
+    get(key, x);
+  }
   Reader sub(const char* key) const {
     if (!j.at(key).is_object()) bad(key, "an object");
     return Reader{j.at(key), where + ", '" + key + "'"};
@@ -124,7 +134,7 @@ std::string paper_task_path() { return IDMPC_SOURCE_DIR "/mjcf/paper_swingup.jso
 std::string paper_tables_path() { return IDMPC_SOURCE_DIR "/mjcf/paper_tables.json"; }
 
 Task load_task(const std::string& path, const Task* base) {
-  Task t = task_from_json(parse_file(path, "task file"), "task file '" + path + "'", base ? *base : paper_task());
+  Task t = task_from_json(parse_file(path, "task file"), "task file '" + path + "'", base ? *base : arm_defaults());
   t.source = path;
   if (!t.model.empty()) t.model = resolve_path(t.model, path);
   return t;
@@ -135,7 +145,8 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   const Reader r{j, where};
   if (!j.is_object()) throw std::invalid_argument(r.where + ": expected a JSON object");
   r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
-           "simd_stages", "direct_torque", "implicit_damping", "torque_limit", "weights", "cgmres"});
+           "simd_stages", "direct_torque", "actuate_every_joint", "implicit_damping", "friction_velocity",
+           "offset_free", "observer_time_constant", "reach_tolerance", "torque_limit", "weights", "cgmres"});
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
@@ -157,15 +168,29 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   r.get("derivatives", t.derivatives);
   r.get("simd_stages", t.simd_stages);
   r.get("direct_torque", t.direct_torque);
-  r.get("implicit_damping", t.implicit_damping);
+  r.get("actuate_every_joint", t.actuate_every_joint);
+  if (r.has("implicit_damping")) {
+    const json& v = j.at("implicit_damping");
+    if (v.is_boolean()) {
+      t.implicit_damping = v.get<bool>() ? "on" : "off";
+    } else if (v == "auto") {
+      t.implicit_damping = "auto";
+    } else {
+      r.bad("implicit_damping", "true, false or \"auto\"");
+    }
+  }
+  r.get_or_auto("friction_velocity", t.friction_velocity);
+  r.get("offset_free", t.offset_free);
+  r.get("observer_time_constant", t.observer_time_constant);
+  r.get("reach_tolerance", t.reach_tolerance);
   if (r.has("torque_limit")) r.get("torque_limit", t.torque_limit);
   if (r.has("weights")) {
     const Reader w = r.sub("weights");
     w.known({"Qq", "Qv", "Qa", "R", "Qa_fallback"});
-    w.get("Qq", t.Qq);
-    w.get("Qv", t.Qv);
+    w.get_or_auto("Qq", t.Qq);
+    w.get_or_auto("Qv", t.Qv);
     w.get("Qa", t.Qa);
-    w.get("R", t.R);
+    w.get_or_auto("R", t.R);
     w.get("Qa_fallback", t.Qa_fallback);
   }
   if (r.has("cgmres")) {
@@ -185,10 +210,40 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
 }
 
 const Task& paper_task() {
-  // the base of every other task: it must name every field itself
+  // the paper's task names every field itself
   static const Task task = [] {
     Task empty;
     return load_task(paper_task_path(), &empty);
+  }();
+  return task;
+}
+
+const Task& arm_defaults() {
+  // docs/tasks.md gives the reason for each value
+  static const Task task = [] {
+    Task t;
+    t.description = "defaults for real arms";
+    t.q0_rule = "home";
+    t.duration = 6;
+    t.formulation = "id";
+    t.derivatives = "adjoint";
+    t.simd_stages = true;
+    t.implicit_damping = "auto";
+    t.offset_free = true;
+    t.observer_time_constant = 0.02;
+    t.reach_tolerance = 5e-3;
+    t.Qa = {0};
+    t.Qa_fallback = 1e-4;
+    t.N = 25;
+    t.kmax = 10;
+    t.Tf = 0.5;
+    t.alpha = 0;
+    t.dt = 1e-3;
+    t.zeta = 0;
+    t.h = 1e-8;
+    t.init_full_horizon = true;
+    t.shooting = "single";
+    return t;
   }();
   return task;
 }
@@ -205,9 +260,16 @@ nlohmann::json to_json(const Task& t) {
   j["derivatives"] = t.derivatives;
   j["simd_stages"] = t.simd_stages;
   j["direct_torque"] = t.direct_torque;
-  j["implicit_damping"] = t.implicit_damping;
+  j["actuate_every_joint"] = t.actuate_every_joint;
+  j["implicit_damping"] = t.implicit_damping == "auto" ? json("auto") : json(t.implicit_damping == "on");
+  auto or_auto = [](const std::vector<double>& x) { return x.empty() ? json("auto") : json(x); };
+  j["friction_velocity"] = or_auto(t.friction_velocity);
+  j["offset_free"] = t.offset_free;
+  j["observer_time_constant"] = t.observer_time_constant;
+  j["reach_tolerance"] = t.reach_tolerance;
   if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
-  j["weights"] = {{"Qq", t.Qq}, {"Qv", t.Qv}, {"Qa", t.Qa}, {"R", t.R}, {"Qa_fallback", t.Qa_fallback}};
+  j["weights"] = {{"Qq", or_auto(t.Qq)}, {"Qv", or_auto(t.Qv)}, {"Qa", t.Qa}, {"R", or_auto(t.R)},
+                  {"Qa_fallback", t.Qa_fallback}};
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
                  {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon},
                  {"shooting", t.shooting}};
@@ -215,7 +277,7 @@ nlohmann::json to_json(const Task& t) {
 }
 
 ResolvedTask resolve(const Task& t, int n) {
-  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}};
+  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}};
   if (t.N < 1) throw std::invalid_argument("N must be at least 1, got " + std::to_string(t.N));
   if (!(t.duration > 0) || !std::isfinite(t.duration)) {
     throw std::invalid_argument("duration must be positive, got " + std::to_string(t.duration));
@@ -231,13 +293,15 @@ ResolvedTask resolve(const Task& t, int n) {
   // named as the option and as the task field
   auto weight = [&](const std::vector<double>& x, const char* name) {
     const std::string both = std::string("--") + name + " (weights." + name + ")";
+    if (x.empty()) return VecX<double>();  // "auto": arm_weights fills it in with the model
     return non_negative(per_joint(x, n, both), both);
   };
-  r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa, "Qa"), weight(t.R, "R")};
-  // the problem must be strictly convex in its decision variable (DESIGN §4–5)
+  r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa.empty() ? std::vector<double>{0} : t.Qa, "Qa"),
+                         weight(t.R, "R")};
+  // the problem must be strictly convex in its decision variable (DESIGN §4–5); "auto" R is positive
   const VecX<double>& R = r.weights.R;
   const VecX<double>& Qa = r.weights.Qa;
-  for (int j = 0; j < n; ++j) {
+  for (int j = 0; j < n && R.size() == n; ++j) {
     if (r.formulation == Formulation::kForwardDynamics && !(R[j] > 0)) {
       throw std::invalid_argument("--R (weights.R) must be positive with FD: the torque is the decision "
                                   "variable and R its only weight; got " + text(R[j]) + " on joint " +
@@ -280,9 +344,27 @@ ResolvedTask resolve(const Task& t, int n) {
   r.cgmres.init_full_horizon = t.init_full_horizon;
   r.cgmres.shooting = parse_shooting(t.shooting);
   r.cgmres.validate();
-  if (t.implicit_damping && t.alpha != 0) {
+  if (t.implicit_damping != "on" && t.implicit_damping != "off" && t.implicit_damping != "auto") {
+    throw std::invalid_argument("--implicit-damping (implicit_damping): expected on, off or auto, got '" +
+                                t.implicit_damping + "'");
+  }
+  if (t.implicit_damping == "on" && t.alpha != 0) {
     throw std::invalid_argument("--implicit-damping (implicit_damping) needs a fixed horizon, alpha = 0 (its step is "
                                 "T_f/N), got alpha = " + text(t.alpha));
+  }
+  if (!t.friction_velocity.empty()) {
+    r.friction_velocity = per_joint(t.friction_velocity, n, "--friction-velocity (friction_velocity)");
+    if (!(r.friction_velocity.array() > 0).all() || !r.friction_velocity.allFinite()) {
+      throw std::invalid_argument("--friction-velocity (friction_velocity) must be positive and finite");
+    }
+  }
+  if (t.offset_free && !(t.observer_time_constant > 0 && std::isfinite(t.observer_time_constant))) {
+    throw std::invalid_argument("--observer-time-constant (observer_time_constant) must be positive with offset-free "
+                                "tracking, got " + text(t.observer_time_constant));
+  }
+  if (!(t.reach_tolerance >= 0) || !std::isfinite(t.reach_tolerance)) {
+    throw std::invalid_argument("--reach-tolerance (reach_tolerance) must be non-negative and finite, got " +
+                                text(t.reach_tolerance));
   }
   return r;
 }
@@ -291,8 +373,12 @@ bool without_Qa(const Task& t) {
   return std::all_of(t.Qa.begin(), t.Qa.end(), [](double x) { return x == 0; });
 }
 
-std::string divergence_hint(const Task& t) {
+std::string divergence_hint(const Task& t, double damping_step_ratio) {
   std::vector<std::string> tries;
+  if (damping_step_ratio > 1 && t.implicit_damping == "off") {
+    tries.push_back("--implicit-damping on (or auto; the joint damping makes the explicit horizon step unstable: "
+                    "dtau*max eig(M^-1 D) = " + text(damping_step_ratio) + " > 1)");
+  }
   if (t.formulation == "id" && without_Qa(t)) {
     const double Qa = t.Qa_fallback > 0 ? t.Qa_fallback : 1e-4;
     tries.push_back("--Qa " + text(Qa) + " (a small weight on the accelerations, the paper's fallback" +
@@ -302,8 +388,8 @@ std::string divergence_hint(const Task& t) {
     tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
                     "growing the horizon from zero)");
   }
-  auto first = [](const std::vector<double>& x) { return x.empty() ? 0.0 : x.front(); };
-  tries.push_back("a larger --R (now " + text(first(t.R)) + ") for smaller, smoother torques");
+  tries.push_back("a larger --R (now " + (t.R.empty() ? std::string("auto") : text(t.R.front())) +
+                  ") for smaller, smoother torques");
   const double zeta = t.zeta > 0 ? t.zeta : 1.0 / t.dt;
   tries.push_back("a smaller --zeta (now " + text(zeta) + ")");
   tries.push_back("a larger --N (now " + std::to_string(t.N) + ") for finer horizon steps");

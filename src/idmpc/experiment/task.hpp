@@ -5,8 +5,9 @@
 /// paper's swing-up is mjcf/paper_swingup.json and its tables mjcf/paper_tables.json; every
 /// command, test, benchmark and script reads those files, so the paper's setup exists once.
 ///
-/// Task file fields (all optional in a user's file: missing ones come from the base task, the
-/// paper's swing-up; unknown fields are an error):
+/// Task file fields (all optional in a user's file: missing ones come from the defaults for real
+/// arms, arm_defaults(), documented with their reasons in docs/tasks.md; the paper's swing-up names
+/// every field itself; unknown fields are an error):
 ///   "model"        path of the MJCF/URDF file, relative to the task file's directory
 ///   "q0"           initial joint positions, one per joint, "swingup" = (−π, 0, …, 0) or
 ///                  "home" = the model's keyframe named home
@@ -17,11 +18,22 @@
 ///                  dynamics and products), FD matrix (stage derivatives after the rollout), FD
 ///                  adjoint under multiple shooting (bool)
 ///   "direct_torque" apply joint torques through qfrc_applied instead of the actuators (bool)
+///   "actuate_every_joint" with direct_torque on an under-actuated model: the user's confirmation
+///                  that every joint becomes actuated (bool)
 ///   "implicit_damping" integrate joint damping implicitly in the horizon (with_implicit_damping,
-///                  step T_f/N; needs alpha = 0): for heavily damped arms (bool)
+///                  step T_f/N; needs alpha = 0): true, false or "auto" (when the explicit
+///                  Euler step would be unstable, Δτ·max eig(M⁻¹D) > 1)
+///   "friction_velocity" ε of the smooth joint friction f·tanh(v/ε) in the horizon: a scalar or
+///                  one per joint [rad/s or m/s], or "auto" (the smallest that keeps the
+///                  explicit horizon step stable)
+///   "offset_free"  estimate the joint torque the model misses (disturbance observer) and add it
+///                  to the horizon model of both formulations (bool)
+///   "observer_time_constant" the observer's filter time constant [s]
+///   "reach_tolerance" the target counts as reached when max|q − q_ref| at the end is below it
 ///   "torque_limit" |τ_j| ≤ this: a scalar or one per joint (empty: the model's actuator ranges)
-///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars or one per joint; "Qa_fallback": the Q_a
-///                  an ID run that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
+///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars, one per joint, or "auto" (scaled by the
+///                  model's torque limits, see arm_weights); "Qa_fallback": the Q_a an ID run
+///                  that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
 ///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
@@ -50,9 +62,14 @@ struct Task {
   std::string formulation, derivatives;
   bool simd_stages = true;
   bool direct_torque = false;
-  bool implicit_damping = false;
+  bool actuate_every_joint = false;
+  std::string implicit_damping = "off";      ///< "on", "off" or "auto"
+  std::vector<double> friction_velocity;     ///< empty: "auto"
+  bool offset_free = false;
+  double observer_time_constant = 0;
+  double reach_tolerance = 0;
   std::vector<double> torque_limit;  ///< empty: the model's actuator ranges
-  std::vector<double> Qq, Qv, Qa, R;
+  std::vector<double> Qq, Qv, Qa, R; ///< empty: "auto" (Qq, Qv, R only)
   double Qa_fallback = 0;
   int N = 0, kmax = 0;
   double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
@@ -73,6 +90,9 @@ Task load_task(const std::string& path, const Task* base = nullptr);
 Task task_from_json(const nlohmann::json& j, const std::string& where, const Task& base);
 /// @brief The paper's swing-up task (read once from paper_task_path()).
 const Task& paper_task();
+/// @brief The defaults for real arms, the base of every task file but the paper's (each field
+/// and its reason in docs/tasks.md).
+const Task& arm_defaults();
 
 nlohmann::json to_json(const Task& task);
 
@@ -82,7 +102,8 @@ struct ResolvedTask {
   DerivativeMode derivatives;
   VecX<double> q0, qref;           ///< q0 empty for "home": the model's keyframe
   VecX<double> torque_limit;  ///< size n, +infinity where the task sets none
-  OcpWeights weights;
+  OcpWeights weights;              ///< Qq, Qv, R of size 0 where the task says "auto"
+  VecX<double> friction_velocity;  ///< size n, or size 0 for "auto"
   CgmresSettings cgmres;
   std::vector<std::string> warnings;  ///< settings accepted but without effect (e.g. Q_a in FD)
 };
@@ -95,8 +116,10 @@ ResolvedTask resolve(const Task& task, int n);
 bool without_Qa(const Task& task);
 
 /// @brief What to try after a divergence of this task, as options to change: one line
-/// starting "try ", e.g. a small Q_a for ID, the full-horizon start, a larger R, a smaller ζ.
-std::string divergence_hint(const Task& task);
+/// starting "try ", e.g. implicit damping when it was off and the explicit horizon step is
+/// unstable (damping_step_ratio = Δτ·max eig(M⁻¹D) > 1), a small Q_a for ID, the full-horizon
+/// start, a larger R, a smaller ζ.
+std::string divergence_hint(const Task& task, double damping_step_ratio = 0);
 
 /// @brief One cell of the paper's Tables 1–3 (mjcf/paper_tables.json).
 struct PaperCell {

@@ -176,23 +176,46 @@ template <typename S> Vec6<S> times_motion_subspace(const Model& model, int i, c
                                                      : Vec6<S>(M.template rightCols<3>() * s);
 }
 
-/// @brief The partial derivatives of armature_and_passive with respect to q, v and a.
+/// @brief The partial derivatives of armature_and_passive with respect to q, v and a, without
+/// the friction's (friction_slope, which depends on v).
 struct ArmaturePassivePartials {
   double dq;  ///< stiffness k
   double dv;  ///< damping d
   double da;  ///< armature
 };
 
-/// @brief Joint i's own terms of ID(q, v, a)_i besides the bodies' (DESIGN §2–§3):
-/// armature·a + d·v + k·(q − q_spring), i.e. the armature's inertia minus MuJoCo's passive force
-/// −d·v − k·(q − q_spring). Linear in (q, v, a): its partials are armature_passive_partials.
+/// @brief Joint friction f·tanh(v/ε): a smooth stand-in for MuJoCo's friction loss, which is a
+/// dry-friction constraint force of magnitude ≤ f (DESIGN §10). Zero where f = 0.
+template <typename S> S joint_friction(const Model& model, int i, const S& v) {
+  using std::tanh;
+  const double f = model.friction[i];
+  if (f == 0) return S(0);
+  return f * tanh(v * (1.0 / model.friction_velocity[i]));
+}
+
+/// @brief ∂/∂v of joint_friction: (f/ε)·(1 − tanh²(v/ε)).
+template <typename S> S friction_slope(const Model& model, int i, const S& v) {
+  using std::tanh;
+  const double f = model.friction[i];
+  if (f == 0) return S(0);
+  const double inv_eps = 1.0 / model.friction_velocity[i];
+  const S t = tanh(v * inv_eps);
+  return (f * inv_eps) * (S(1) - t * t);
+}
+
+/// @brief Joint i's own terms of ID(q, v, a)_i besides the bodies' (DESIGN §2–§3, §10):
+/// armature·a + d·v + k·(q − q_spring) + f·tanh(v/ε), i.e. the armature's inertia minus
+/// MuJoCo's passive force −d·v − k·(q − q_spring) and the smooth friction. Linear in (q, v, a)
+/// but for the friction: its partials are armature_passive_partials plus friction_slope in v.
 /// FD (ABA) uses it with a = 0 and the armature in D.
 template <typename S>
 S armature_and_passive(const Model& model, int i, const S& q, const S& v, const S& a) {
-  return model.armature[i] * a + model.damping[i] * v + model.stiffness[i] * (q - model.q_spring[i]);
+  return model.armature[i] * a + model.damping[i] * v + model.stiffness[i] * (q - model.q_spring[i]) +
+         joint_friction<S>(model, i, v);
 }
 
-/// @brief ∂/∂q, ∂/∂v, ∂/∂a of armature_and_passive(model, i, q, v, a): (k, d, armature).
+/// @brief ∂/∂q, ∂/∂v, ∂/∂a of armature_and_passive(model, i, q, v, a) without the friction:
+/// (k, d, armature).
 inline ArmaturePassivePartials armature_passive_partials(const Model& model, int i) {
   return {model.stiffness[i], model.damping[i], model.armature[i]};
 }

@@ -43,8 +43,13 @@ int checked_size(const std::vector<Link>& links, const Vec3<double>& gravity,
     if (!std::isfinite(l.I.m) || !l.I.h.allFinite() || !l.I.Ibar.allFinite() || l.I.m < 0) {
       fail("inertia must be finite with mass >= 0, got mass " + std::to_string(l.I.m));
     }
-    for (double x : {l.q_ref, l.armature, l.damping, l.stiffness, l.q_spring}) {
-      if (!std::isfinite(x)) fail("q_ref, armature, damping, stiffness and q_spring must be finite");
+    for (double x : {l.q_ref, l.armature, l.damping, l.stiffness, l.q_spring, l.friction, l.friction_velocity}) {
+      if (!std::isfinite(x)) fail("q_ref, armature, damping, stiffness, q_spring and friction must be finite");
+    }
+    if (l.friction < 0) fail("friction loss must be >= 0, got " + std::to_string(l.friction));
+    if (l.friction > 0 && !(l.friction_velocity > 0)) {
+      fail("friction loss " + std::to_string(l.friction) + " needs a positive smoothing velocity, got " +
+           std::to_string(l.friction_velocity));
     }
   }
   return static_cast<int>(links.size());
@@ -135,6 +140,8 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       damping(gather_vector(links, &Link::damping)),
       stiffness(gather_vector(links, &Link::stiffness)),
       q_spring(gather_vector(links, &Link::q_spring)),
+      friction(gather_vector(links, &Link::friction)),
+      friction_velocity(gather_vector(links, &Link::friction_velocity)),
       gravity(world_gravity),
       joint_names(gather(links, &Link::joint_name)),
       name(std::move(model_name)),
@@ -156,6 +163,8 @@ Link Model::link(int i) const {
   l.damping = damping[i];
   l.stiffness = stiffness[i];
   l.q_spring = q_spring[i];
+  l.friction = friction[i];
+  l.friction_velocity = friction_velocity[i];
   l.joint_name = joint_names[i];
   return l;
 }
@@ -169,6 +178,21 @@ Model with_implicit_damping(const Model& model, double dt) {
   for (int i = 0; i < model.n; ++i) {
     links.push_back(model.link(i));
     links.back().armature += dt * links.back().damping;
+  }
+  return Model(links, model.gravity, model.name);
+}
+
+Model with_joint_friction(const Model& model, const VecX<double>& friction, const VecX<double>& velocity) {
+  if (friction.size() != model.n || velocity.size() != model.n) {
+    throw std::invalid_argument("joint friction: expected " + std::to_string(model.n) + " values, got " +
+                                std::to_string(friction.size()) + " and " + std::to_string(velocity.size()));
+  }
+  std::vector<Link> links;
+  links.reserve(static_cast<size_t>(model.n));
+  for (int i = 0; i < model.n; ++i) {
+    links.push_back(model.link(i));
+    links.back().friction = friction[i];
+    links.back().friction_velocity = velocity[i];
   }
   return Model(links, model.gravity, model.name);
 }

@@ -28,6 +28,8 @@ struct Link {
   double damping = 0;                         ///< passive −d·v
   double stiffness = 0;                       ///< passive −k·(q − q_spring)
   double q_spring = 0;
+  double friction = 0;                        ///< friction loss f ≥ 0: passive −f·tanh(v/ε)
+  double friction_velocity = 0;               ///< ε > 0 of the smooth friction (if f > 0)
   std::string joint_name;                     ///< for messages
 };
 
@@ -60,6 +62,8 @@ class Model {
   const VecX<double> damping;                  ///< passive −d·v
   const VecX<double> stiffness;                ///< passive −k·(q − q_spring)
   const VecX<double> q_spring;
+  const VecX<double> friction;                 ///< friction loss f: passive −f·tanh(v/ε)
+  const VecX<double> friction_velocity;        ///< ε of the smooth friction (joint.hpp)
   const Vec3<double> gravity;                  ///< world gravity (zero if disabled)
   const std::vector<std::string> joint_names;  ///< for messages
   const std::string name;
@@ -87,5 +91,11 @@ class Model {
 /// end of the step, as MuJoCo's Euler integrator does), stable for any dt; its inverse
 /// dynamics are τ = M q̈ + c + D v⁺. Throws std::invalid_argument for dt < 0 or non-finite.
 Model with_implicit_damping(const Model& model, double dt);
+
+/// @brief The model with joint friction f·tanh(v/ε) (DESIGN §10): MuJoCo's friction loss, a
+/// dry-friction constraint force of magnitude ≤ f, made smooth for the horizon. `friction` and
+/// `velocity` have size n; ε must be positive where f is. Throws std::invalid_argument
+/// otherwise, naming the joint.
+Model with_joint_friction(const Model& model, const VecX<double>& friction, const VecX<double>& velocity);
 
 }  // namespace idmpc

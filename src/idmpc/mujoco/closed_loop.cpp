@@ -136,6 +136,9 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   result.final_v = result.diverged ? v : plant.v();
   result.final_q_error = (result.final_q - controller.q_ref()).cwiseAbs().maxCoeff();
   result.final_v_norm = result.final_v.norm();
+  result.contact_steps = plant.contact_steps();
+  result.max_contact_force = plant.max_contact_force();
+  result.final_disturbance = controller.disturbance();
   return result;
 }
 

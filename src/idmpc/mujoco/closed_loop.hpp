@@ -61,6 +61,9 @@ struct RunResult {
   /// @brief Largest Controller::constraint_violation over the updates [N m]: how far the OCP's
   /// own solution left the torque bounds (the plant's torques are clamped regardless).
   double max_constraint_violation = 0;
+  long contact_steps = 0;         ///< control steps with a contact in the plant (Plant::contact_steps)
+  double max_contact_force = 0;   ///< the largest contact normal force [N]
+  VecX<double> final_disturbance;  ///< the controller's estimate d̂ at the end (zero without observer)
   /// @brief max |q_i − q_ref,i| at the end; after a divergence, of the last measured state
   /// (before MuJoCo's reset of a blown-up simulation)
   double final_q_error = 0;

@@ -93,70 +93,243 @@ void require_finite(const mjModel* m, const std::string& source) {
   require(finite(m->opt.gravity, 3), "the model", "gravity", m->opt.gravity, 3);
 }
 
+// "'a1', 'a2'" or, for more than three, "'a1'…'a7' (7)"
+std::string name_list(const std::vector<std::string>& names) {
+  if (names.size() > 3) return "'" + names.front() + "'…'" + names.back() + "' (" + std::to_string(names.size()) + ")";
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "'" : ", '") + n + "'";
+  return out;
+}
+
+std::string joint_list(const mjModel* m, const std::vector<int>& dofs) {
+  std::string out;
+  for (int i : dofs) out += (out.empty() ? "" : ", ") + joint_label(m, m->dof_jntid[i]);
+  return out;
+}
+
+// the dofs some actuator drives: joint transmissions directly, the others (tendons, sites, …)
+// through their moment arms at qpos0
+std::vector<bool> actuated_dofs(const mjModel* m) {
+  std::vector<bool> out(m->nv, false);
+  bool other = false;
+  for (int u = 0; u < m->nu; ++u) {
+    const int type = m->actuator_trntype[u];
+    if (type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT) {
+      out[m->jnt_dofadr[m->actuator_trnid[2 * u]]] = true;
+    } else {
+      other = true;
+    }
+  }
+  if (other) {
+    const DataPtr d = make_data(m);
+    mju_copy(d->qpos, m->qpos0, m->nq);
+    mj_kinematics(m, d.get());
+    mj_comPos(m, d.get());
+    mj_tendon(m, d.get());
+    mj_transmission(m, d.get());
+    for (int u = 0; u < m->nu; ++u) {
+      const int type = m->actuator_trntype[u];
+      if (type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT) continue;
+      for (int i = 0; i < m->nv; ++i) {
+        if (d->actuator_moment[static_cast<std::size_t>(u) * m->nv + i] != 0) out[i] = true;
+      }
+    }
+  }
+  return out;
+}
+
+// the dof of an actuated joint that an active joint equality ties dof i to, or −1
+int coupled_actuated_dof(const mjModel* m, int i, const std::vector<bool>& actuated) {
+  const int j = m->dof_jntid[i];
+  for (int e = 0; e < m->neq; ++e) {
+    if (m->eq_type[e] != mjEQ_JOINT || !m->eq_active[e]) continue;
+    const int a = m->eq_obj1id[e], b = m->eq_obj2id[e];
+    const int other = a == j ? b : (b == j ? a : -1);
+    if (other >= 0 && actuated[static_cast<std::size_t>(m->jnt_dofadr[other])]) return m->jnt_dofadr[other];
+  }
+  return -1;
+}
+
+// an actuator the controller can use: a motor (τ → ctrl) or a servo (replaced by τ)
+struct JointActuator {
+  int actuator = -1;
+  bool motor = false;
+};
+
 Actuation import_actuation(const mjModel* m, const std::string& source, const ImportOptions& options) {
   Actuation act;
+  std::vector<std::pair<int, int>> coupled;  // (dof, the actuated dof it is tied to)
   constexpr double kInf = std::numeric_limits<double>::infinity();
   act.torque_lower = VecX<double>::Constant(m->nv, -kInf);
   act.torque_upper = VecX<double>::Constant(m->nv, kInf);
-  if (options.direct_torque || m->nu == 0) return act;
-  act.direct = false;
-  act.actuator_of_dof.assign(m->nv, -1);
-  act.ctrl_per_torque.assign(m->nv, 0.0);
+  auto bound = [&](int dof, double a, double b) {
+    act.torque_lower[dof] = std::max(act.torque_lower[dof], std::min(a, b));
+    act.torque_upper[dof] = std::min(act.torque_upper[dof], std::max(a, b));
+  };
+  // joints without an actuator: direct torques drive them only on the user's confirmation
+  auto require_confirmation = [&](const std::vector<bool>& actuated, const std::string& why) {
+    std::vector<int> bare;
+    for (int i = 0; i < m->nv; ++i) {
+      if (actuated[i]) continue;
+      // a joint an active joint equality ties to an actuated one (a mimic joint, e.g. a second
+      // finger) moves with that actuator's effort: driven too, within the same range
+      const int leader = coupled_actuated_dof(m, i, actuated);
+      if (leader >= 0) {
+        act.coupled_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]) + "' (with '" +
+                                     object_name(m, mjOBJ_JOINT, m->dof_jntid[leader]));
+        coupled.emplace_back(i, leader);
+        continue;
+      }
+      bare.push_back(i);
+    }
+    if (bare.empty()) return;
+    if (!options.actuate_every_joint) {
+      throw std::invalid_argument("model '" + source + "' is under-actuated: " + joint_list(m, bare) +
+                                  (bare.size() == 1 ? " has" : " have") + " no actuator, and " + why +
+                                  ": confirm with --actuate-every-joint (ImportOptions::actuate_every_joint)");
+    }
+    for (int i : bare) act.unactuated_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
+  };
+  // the file's own joint torque ranges, and what is left unbounded
+  auto finish = [&] {
+    for (const auto& [dof, leader] : coupled) bound(dof, act.torque_lower[leader], act.torque_upper[leader]);
+    for (int j = 0; j < m->njnt; ++j) {
+      if (static_cast<std::size_t>(j) < options.joint_force_lower.size() &&
+          static_cast<std::size_t>(j) < options.joint_force_upper.size()) {
+        bound(m->jnt_dofadr[j], options.joint_force_lower[j], options.joint_force_upper[j]);
+      }
+    }
+    for (int i = 0; i < m->nv; ++i) {
+      if (std::isinf(act.torque_lower[i]) || std::isinf(act.torque_upper[i])) {
+        act.unbounded_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
+      }
+    }
+    return act;
+  };
+  if (m->nu == 0) return finish();
+  // a zero, denormal or non-finite gear is a broken number whatever drives the joints
+  for (int u = 0; u < m->nu; ++u) {
+    const double gear = m->actuator_gear[6 * u];
+    if (!std::isfinite(gear) || std::abs(gear) < kMinGear) {
+      throw std::invalid_argument("actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "' in '" + source +
+                                  "' has gear " + number(gear) + ": expected a finite gear with |gear| >= " +
+                                  number(kMinGear));
+    }
+  }
+  if (options.direct_torque) {
+    require_confirmation(actuated_dofs(m), "--direct-torque would apply torques to every joint");
+    return finish();
+  }
+
+  const std::string hint = " in '" + source +
+                           "': only motors and servos on joints are supported (or use --direct-torque to "
+                           "apply joint torques directly)";
+  std::vector<JointActuator> of_dof(m->nv);
+  std::vector<bool> actuated(m->nv, false);
+  bool servos = false;
   for (int u = 0; u < m->nu; ++u) {
     const std::string name = "actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'";
-    const std::string hint = " in '" + source +
-                             "': only motor actuators on joints are supported (or use "
-                             "--direct-torque to apply joint torques directly)";
-    if (m->actuator_trntype[u] != mjTRN_JOINT) {
+    const int type = m->actuator_trntype[u];
+    if (type != mjTRN_JOINT && type != mjTRN_JOINTINPARENT) {
       throw std::invalid_argument(name + " does not act on a joint" + hint);
     }
-    const bool motor = m->actuator_dyntype[u] == mjDYN_NONE &&
-                       m->actuator_gaintype[u] == mjGAIN_FIXED &&
-                       m->actuator_biastype[u] == mjBIAS_NONE;
-    if (!motor) {
-      throw std::invalid_argument(name + " is not a motor (it has activation dynamics, a "
-                                         "non-fixed gain or a bias such as a position servo)" +
+    const int bias = m->actuator_biastype[u];
+    if (m->actuator_gaintype[u] != mjGAIN_FIXED || (bias != mjBIAS_NONE && bias != mjBIAS_AFFINE)) {
+      throw std::invalid_argument(name + " is neither a motor nor a servo (a muscle, or a user-defined gain or bias)" +
                                   hint);
     }
+    const bool motor = m->actuator_dyntype[u] == mjDYN_NONE && bias == mjBIAS_NONE;
     // torque = gain·gear·ctrl: a zero, denormal or non-finite factor makes ctrl = τ/(gain·gear)
     // meaningless
     const double gear = m->actuator_gear[6 * u], gain = m->actuator_gainprm[u * mjNGAIN] * gear;
-    if (!std::isfinite(gear) || std::abs(gear) < kMinGear) {
-      throw std::invalid_argument(name + " in '" + source + "' has gear " + number(gear) +
-                                  ": expected a finite gear with |gear| >= " + number(kMinGear));
-    }
-    if (!std::isfinite(gain) || std::abs(gain) < kMinGear) {
+    if (motor && (!std::isfinite(gain) || std::abs(gain) < kMinGear)) {
       throw std::invalid_argument(name + " in '" + source + "' has gain×gear " + number(gain) +
                                   ": expected a finite product with |gain×gear| >= " + number(kMinGear));
     }
     const int dof = m->jnt_dofadr[m->actuator_trnid[2 * u]];
-    if (act.actuator_of_dof[dof] >= 0) {
-      throw std::invalid_argument(name + " drives " +
-                                  joint_label(m, m->actuator_trnid[2 * u]) +
+    if (actuated[dof]) {
+      throw std::invalid_argument(name + " drives " + joint_label(m, m->actuator_trnid[2 * u]) +
                                   " which already has an actuator in '" + source +
-                                  "': expected exactly one motor per joint");
+                                  "': expected exactly one motor or servo per joint");
     }
-    act.actuator_of_dof[dof] = u;
-    act.ctrl_per_torque[dof] = 1.0 / gain;
-    // the torque range: control range through gain and gear, force range through the gear
-    auto bound = [&](double a, double b) {
-      act.torque_lower[dof] = std::max(act.torque_lower[dof], std::min(a, b));
-      act.torque_upper[dof] = std::min(act.torque_upper[dof], std::max(a, b));
-    };
-    if (m->actuator_ctrllimited[u]) bound(gain * m->actuator_ctrlrange[2 * u], gain * m->actuator_ctrlrange[2 * u + 1]);
+    actuated[dof] = true;
+    of_dof[dof] = JointActuator{u, motor};
+    servos = servos || !motor;
+    // the torque range: a motor's control range through gain and gear, any force range through
+    // the gear (a servo's control range is a position or velocity, no torque)
+    if (motor && m->actuator_ctrllimited[u]) {
+      bound(dof, gain * m->actuator_ctrlrange[2 * u], gain * m->actuator_ctrlrange[2 * u + 1]);
+    }
     if (m->actuator_forcelimited[u]) {
-      bound(gear * m->actuator_forcerange[2 * u], gear * m->actuator_forcerange[2 * u + 1]);
+      bound(dof, gear * m->actuator_forcerange[2 * u], gear * m->actuator_forcerange[2 * u + 1]);
     }
   }
+  if (servos) {
+    act.direct = true;
+    for (int u = 0; u < m->nu; ++u) {
+      const int dof = m->jnt_dofadr[m->actuator_trnid[2 * u]];
+      if (!of_dof[dof].motor) act.replaced_servos.push_back(object_name(m, mjOBJ_ACTUATOR, u));
+    }
+    require_confirmation(actuated, "its servos are replaced by joint torques, which would drive every joint");
+    return finish();
+  }
+  std::vector<int> bare;
   for (int i = 0; i < m->nv; ++i) {
-    if (act.actuator_of_dof[i] < 0) {
-      throw std::invalid_argument("model '" + source + "' is under-actuated: " +
-                                  joint_label(m, m->dof_jntid[i]) +
-                                  " has no motor actuator (expected one motor per joint, or no "
-                                  "actuators at all, or --direct-torque)");
-    }
+    if (!actuated[i]) bare.push_back(i);
   }
-  return act;
+  if (!bare.empty()) {
+    throw std::invalid_argument("model '" + source + "' is under-actuated: " + joint_list(m, bare) +
+                                (bare.size() == 1 ? " has" : " have") +
+                                " no motor actuator (expected one motor per joint, or no actuators at all, or "
+                                "--direct-torque --actuate-every-joint to drive every joint with direct torques)");
+  }
+  act.direct = false;
+  act.actuator_of_dof.resize(m->nv);
+  act.ctrl_per_torque.resize(m->nv);
+  for (int i = 0; i < m->nv; ++i) {
+    const int u = of_dof[i].actuator;
+    act.actuator_of_dof[i] = u;
+    act.ctrl_per_torque[i] = 1.0 / (m->actuator_gainprm[u * mjNGAIN] * m->actuator_gear[6 * u]);
+  }
+  return finish();
+}
+
+// what the import changed in how the model is driven, for the user
+std::vector<std::string> actuation_notices(const mjModel* m, const Actuation& act) {
+  std::vector<std::string> out;
+  if (!act.replaced_servos.empty()) {
+    std::vector<std::string> limited, unlimited;
+    bool position = false, velocity = false;
+    for (const std::string& name : act.replaced_servos) {
+      const int u = mj_name2id(m, mjOBJ_ACTUATOR, name.c_str());
+      const mjtNum* b = m->actuator_biasprm + (u >= 0 ? u : 0) * mjNBIAS;
+      position = position || b[1] != 0;
+      velocity = velocity || (b[1] == 0 && b[2] != 0);
+      (u >= 0 && m->actuator_forcelimited[u] ? limited : unlimited).push_back(name);
+    }
+    const std::string kind = position && velocity ? "position and velocity servos"
+                             : position          ? "position servos"
+                             : velocity          ? "velocity servos"
+                                                 : "servos";
+    std::string line = kind + " " + name_list(act.replaced_servos) +
+                       " replaced by joint torques (applied directly; the plant disables the actuators)";
+    if (!limited.empty()) line += ", limited by the forcerange × gear of " + name_list(limited);
+    if (!unlimited.empty()) line += "; " + name_list(unlimited) + " declare no forcerange";
+    out.push_back(line);
+  }
+  if (!act.coupled_joints.empty()) {
+    out.push_back("joint(s) '" + [&] {
+      std::string l;
+      for (const auto& c : act.coupled_joints) l += (l.empty() ? "" : "', '") + c;
+      return l;
+    }() + "') have no actuator but an active joint equality ties each to an actuated joint: driven by direct "
+          "torques too, within that joint's range");
+  }
+  if (!act.unactuated_joints.empty()) {
+    out.push_back("joint(s) " + name_list(act.unactuated_joints) +
+                  " have no actuator in the model and are driven by direct torques, as confirmed");
+  }
+  return out;
 }
 
 std::vector<std::string> unmodeled_features(const mjModel* m) {
@@ -180,6 +353,24 @@ std::vector<std::string> unmodeled_features(const mjModel* m) {
 }
 
 }  // namespace
+
+std::string Actuation::summary() const {
+  std::string out;
+  if (!replaced_servos.empty()) {
+    out = "servos " + name_list(replaced_servos) + " replaced by joint torques applied directly (qfrc_applied)";
+  } else if (direct) {
+    out = "joint torques applied directly (qfrc_applied)";
+  } else {
+    out = "one motor actuator per joint";
+  }
+  if (!unactuated_joints.empty()) out += "; joints without an actuator driven too: " + name_list(unactuated_joints);
+  if (unbounded_joints.empty()) {
+    out += "; every joint's torque is bounded";
+  } else {
+    out += "; no torque limit declared for joint(s) " + name_list(unbounded_joints);
+  }
+  return out;
+}
 
 ImportedModel import_model(const mjModel* m, const std::string& source, const ImportOptions& options) {
   // joints: hinge and slide only, each one dof
@@ -245,8 +436,9 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
   }
   const Vec3<double> gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
                                                                       : vec3(m->opt.gravity);
-  ImportedModel out{Model(links, gravity, source), import_actuation(m, source, options), {}};
+  ImportedModel out{Model(links, gravity, source), import_actuation(m, source, options), {}, {}};
   out.unmodeled = unmodeled_features(m);
+  out.notices = actuation_notices(m, out.actuation);
   return out;
 }
 

@@ -13,29 +13,63 @@ namespace idmpc::mj {
 
 struct ImportOptions {
   /// Ignore the model's own actuators (whatever their kind) and apply joint torques directly
-  /// through qfrc_applied, e.g. for servo-actuated robot files.
+  /// through qfrc_applied, e.g. for tendon-driven or muscle robot files.
   bool direct_torque = false;
+  /// Confirms that direct torques (direct_torque, or servos replaced by torques) may drive the
+  /// joints that no actuator of the model drives; without it such an under-actuated model is
+  /// refused.
+  bool actuate_every_joint = false;
+  /// Torque range per joint (mjModel joint index) that the file declares for joints no actuator
+  /// drives (LoadedModel::joint_force_lower/upper, from actuatorfrcrange); empty: none. They
+  /// bound the torques of those joints.
+  std::vector<double> joint_force_lower, joint_force_upper;
 };
 
 /// @brief How a joint torque vector τ reaches the plant.
+///
+/// - Motors (fixed gain, no bias, no activation dynamics, one per joint): τ → ctrl.
+/// - Servos (fixed gain and affine bias: `<position>`, `<velocity>`, `<intvelocity>`, `<general>`
+///   servos, with or without activation dynamics, one per joint with a joint transmission) are
+///   replaced by joint torques: τ → qfrc_applied, the plant disables actuation, and each servo's
+///   forcerange × gear (when force-limited) bounds its joint's torque. The servo's control and
+///   activation ranges are positions or velocities, not torques, and do not bound τ.
+/// - Direct (no actuators, or ImportOptions::direct_torque): τ → qfrc_applied.
 struct Actuation {
   bool direct = true;                ///< τ → qfrc_applied (actuation disabled)
   std::vector<int> actuator_of_dof;  ///< else ctrl[actuator_of_dof[i]] = τ_i · ctrl_per_torque[i]
   std::vector<double> ctrl_per_torque;
-  /// Joint torque range each actuator can give (ctrlrange × gain × gear, forcerange × gear);
-  /// ±infinity where unlimited, and always with direct torques.
+  /// Joint torque range each actuator can give (ctrlrange × gain × gear, forcerange × gear; a
+  /// replaced servo's forcerange × gear), intersected with ImportOptions::joint_force_lower/upper;
+  /// ±infinity where unlimited, and with ImportOptions::direct_torque where the file declares none.
   VecX<double> torque_lower, torque_upper;
+  /// Names of the servo actuators replaced by joint torques (then `direct`), in actuator order.
+  std::vector<std::string> replaced_servos;
+  /// Joints whose torque has no declared bound on either side ("joint 'j1'"), in dof order.
+  std::vector<std::string> unbounded_joints;
+  /// Joints no actuator of the model drives, actuated by direct torques on the user's
+  /// confirmation (ImportOptions::actuate_every_joint).
+  std::vector<std::string> unactuated_joints;
+  /// Joints without an actuator that an active joint equality ties to an actuated joint (mimic
+  /// joints), driven by direct torques within that joint's range: "name' (with 'leader".
+  std::vector<std::string> coupled_joints;
+  /// @brief One line: what drives the joints and what bounds their torques.
+  std::string summary() const;
 };
 
 struct ImportedModel {
   Model model;
   Actuation actuation;
   std::vector<std::string> unmodeled;  ///< plant features the controller's model ignores
+  /// What the import changed in how the model is driven (servos replaced by joint torques,
+  /// joints without an actuator actuated, torques without a bound), one line each.
+  std::vector<std::string> notices;
 };
 
 /// @brief Builds the controller's Model from a MuJoCo model. Throws std::invalid_argument
-/// naming the element for anything unsupported (ball/free joints, non-motor actuators,
-/// under-actuation). `source` names the file in messages.
+/// naming the element for anything unsupported: ball/free joints; actuators neither motors nor
+/// servos (muscles, user gains), on a tendon, site or body, or two on one joint (unless
+/// direct_torque); under-actuation (joints without an actuator) unless the torques are direct
+/// and actuate_every_joint confirms it. `source` names the file in messages.
 ImportedModel import_model(const mjModel* m, const std::string& source,
                            const ImportOptions& options = {});
 

@@ -3,9 +3,11 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <regex>
 #include <set>
@@ -13,6 +15,7 @@
 #include <unistd.h>
 
 #include "idmpc/mujoco/mjcf_scan.hpp"
+#include "idmpc/mujoco/mjcf_translate.hpp"
 
 namespace idmpc::mj {
 namespace {
@@ -133,7 +136,15 @@ std::vector<std::string> take_warnings() {
   return out;
 }
 
-ModelPtr load_model(const std::string& path) {
+std::string LoadedModel::notice() const {
+  if (translations.empty()) return "";
+  std::string out = "model '" + source + "' is written for a newer MuJoCo; translated in memory for MuJoCo " +
+                    mj_versionString() + " (the file is unchanged): ";
+  for (std::size_t k = 0; k < translations.size(); ++k) out += (k ? "; " : "") + translations[k];
+  return out;
+}
+
+LoadedModel load_model_translated(const std::string& path) {
   install_error_handlers();
   if (!std::filesystem::exists(path)) {
     throw std::runtime_error("model file '" + path + "' does not exist");
@@ -141,13 +152,54 @@ ModelPtr load_model(const std::string& path) {
   // render-only assets MuJoCo would allocate in full: bounded before it sees them
   const std::vector<MjcfElement> elements = scan_mjcf(path);
   check_render_asset_sizes(elements, path);
+  const MjcfTranslation translation = translate_mjcf(path);
+  std::vector<std::string> untranslatable = translation.untranslatable;
+  auto refuse_untranslatable = [&] {
+    const std::string version = mj_versionString();
+    std::string items;
+    for (std::size_t k = 0; k < untranslatable.size(); ++k) items += (k ? "; " : "") + untranslatable[k];
+    throw std::runtime_error("cannot load model '" + path + "': it needs a newer MuJoCo (this build uses MuJoCo " +
+                             version + "), and " + std::to_string(untranslatable.size()) +
+                             (untranslatable.size() == 1 ? " item has" : " items have") +
+                             " no MuJoCo " + version + " equivalent: " + items);
+  };
+
+  // the translated files, by the names MuJoCo looks them up (without directory)
+  const auto vfs = std::make_unique<mjVFS>();
+  mj_defaultVFS(vfs.get());
+  struct VfsGuard {
+    mjVFS* vfs;
+    ~VfsGuard() { mj_deleteVFS(vfs); }
+  } guard{vfs.get()};
+  for (const auto& [file, text] : translation.files) {
+    const int status = mj_makeEmptyFileVFS(vfs.get(), file.c_str(), static_cast<int>(text.size()));
+    if (status != 0) {
+      throw std::runtime_error("cannot load model '" + path + "': its translation for MuJoCo " + mj_versionString() +
+                               " needs '" + file + "' in memory, and " +
+                               (status == 2 ? "another file of the model has the same name" : "MuJoCo has no room"));
+    }
+    std::memcpy(vfs->filedata[mj_findFileVFS(vfs.get(), file.c_str())], text.data(), text.size());
+  }
+
   char error[1024] = "";
-  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
-  if (!m) {
+  mjModel* raw = mj_loadXML(path.c_str(), translation.files.empty() ? nullptr : vfs.get(), error, sizeof(error));
+  if (!raw) {
+    // without the untranslatable parts the model may not compile: they are the first problem
+    if (!untranslatable.empty()) refuse_untranslatable();
     throw std::runtime_error("cannot load model '" + path + "': " + explain_load_error(error, elements, path));
   }
-  return ModelPtr(m);
+  LoadedModel out;
+  out.model = ModelPtr(raw);
+  out.source = path;
+  out.translations = translation.notices;
+  JointForceRanges ranges = apply_translation(raw, translation, out.translations, untranslatable);
+  if (!untranslatable.empty()) refuse_untranslatable();
+  out.joint_force_lower = std::move(ranges.lower);
+  out.joint_force_upper = std::move(ranges.upper);
+  return out;
 }
+
+ModelPtr load_model(const std::string& path) { return std::move(load_model_translated(path).model); }
 
 ModelPtr load_model_from_string(const std::string& xml) {
   char name[] = "/tmp/idmpc_model_XXXXXX.xml";

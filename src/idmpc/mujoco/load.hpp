@@ -26,6 +26,18 @@ void install_error_handlers();
 /// @brief Warnings MuJoCo raised through mju_warning since the last call (then cleared).
 std::vector<std::string> take_warnings();
 
+/// @brief A loaded model with what its translation from MuJoCo >= 2.3 MJCF did.
+struct LoadedModel {
+  ModelPtr model;
+  std::string source;                     ///< the file loaded
+  std::vector<std::string> translations;  ///< one line per translation; empty if none was needed
+  /// Torque range per joint (mjModel joint index) that the file declares with actuatorfrcrange on
+  /// a joint no actuator drives; ±infinity elsewhere (njnt entries each).
+  std::vector<double> joint_force_lower, joint_force_upper;
+  /// @brief One notice listing every translation ("" if none), for the user.
+  std::string notice() const;
+};
+
 /// @brief Loads an MJCF or URDF file; throws std::runtime_error naming the file and the problem
 /// in one line if the file is missing or malformed: an attribute, value or element of a newer
 /// MuJoCo than this build's (mj_versionString()), a missing mesh or texture file (named as MuJoCo
@@ -34,6 +46,16 @@ std::vector<std::string> take_warnings();
 /// Before MuJoCo parses the file, it and its includes are scanned for images MuJoCo would
 /// allocate in full: a builtin or PNG texture, or a height field, of more than 8192 x 8192 pixels
 /// is refused (such a model would take gigabytes or crash MuJoCo 2.2 inside mj_loadXML).
+///
+/// MJCF written for MuJoCo >= 2.3 is translated in memory first (mjcf_translate.hpp: the user's
+/// files are read, never written): MuJoCo parses the translated text of the changed files (the
+/// others, meshes and textures still come from disk, resolved as MuJoCo 2.2 resolves them), and
+/// what only the compiler knows is set in the compiled model. What has no MuJoCo 2.2 equivalent
+/// is listed all at once in the one-line error, each item with its element, name, attribute and
+/// line. A file that needs no translation is loaded exactly as written.
+LoadedModel load_model_translated(const std::string& path);
+
+/// @brief load_model_translated(path).model: the translations are not reported.
 ModelPtr load_model(const std::string& path);
 
 /// @brief Loads a model from MJCF text (written to a temporary file); for tests.

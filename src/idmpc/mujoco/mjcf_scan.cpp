@@ -132,6 +132,8 @@ std::vector<AssetFile> asset_files(const std::vector<MjcfElement>& elements, con
   std::string meshdir, texturedir;
   for (const MjcfElement& e : elements) {
     if (e.name != "compiler") continue;
+    // MuJoCo >= 2.3's assetdir: both directories, unless meshdir or texturedir is given
+    if (!e.get("assetdir").empty()) meshdir = texturedir = e.get("assetdir");
     meshdir = e.get("meshdir", meshdir);
     texturedir = e.get("texturedir", texturedir);
   }

@@ -36,7 +36,8 @@ struct AssetFile {
 };
 
 /// @brief The asset files of a scanned model, each resolved as MuJoCo 2.2 does: relative to
-/// the model's directory joined with <compiler meshdir/texturedir> where given.
+/// the model's directory joined with <compiler meshdir/texturedir> where given (or MuJoCo >= 2.3's
+/// assetdir, which the translation of mjcf_translate.hpp turns into both).
 std::vector<AssetFile> asset_files(const std::vector<MjcfElement>& elements, const std::string& model_path);
 
 /// @brief Width and height of a PNG file from its header; false if it is no PNG or unreadable.

@@ -1,5 +1,6 @@
 #include "idmpc/mujoco/plant.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -41,6 +42,8 @@ void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
   mju_copy(d_->qpos, q.data(), m_->nq);
   mju_copy(d_->qvel, v.data(), m_->nv);
   mj_forward(m_.get(), d_.get());
+  contact_steps_ = 0;
+  max_contact_force_ = 0;
 }
 
 bool Plant::step(const VecX<double>& tau, std::string* reason) {
@@ -57,7 +60,17 @@ bool Plant::step(const VecX<double>& tau, std::string* reason) {
   }
   int warnings_before = 0;
   for (int w = 0; w < mjNWARNING; ++w) warnings_before += d_->warning[w].number;
-  for (int k = 0; k < substeps_; ++k) mj_step(m_.get(), d_.get());
+  bool contact = false;
+  for (int k = 0; k < substeps_; ++k) {
+    mj_step(m_.get(), d_.get());
+    for (int c = 0; c < d_->ncon; ++c) {
+      mjtNum force[6];
+      mj_contactForce(m_.get(), d_.get(), c, force);
+      max_contact_force_ = std::max(max_contact_force_, std::abs(force[0]));
+      contact = true;
+    }
+  }
+  contact_steps_ += contact;
   int warnings_after = 0;
   for (int w = 0; w < mjNWARNING; ++w) warnings_after += d_->warning[w].number;
   // MuJoCo resets the state on a bad acceleration: that is a divergence, not a new start

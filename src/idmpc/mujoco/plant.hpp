@@ -27,6 +27,11 @@ class Plant {
   /// a reason if the state became non-finite or MuJoCo raised a warning (e.g. bad qacc).
   bool step(const VecX<double>& tau, std::string* reason);
 
+  /// @brief Control steps since reset() during which MuJoCo had at least one contact, and the
+  /// largest contact normal force seen [N] (mj_contactForce).
+  long contact_steps() const { return contact_steps_; }
+  double max_contact_force() const { return max_contact_force_; }
+
   Eigen::Map<const VecX<double>> q() const { return {d_->qpos, m_->nq}; }
   Eigen::Map<const VecX<double>> v() const { return {d_->qvel, m_->nv}; }
   double time() const { return d_->time; }
@@ -37,6 +42,8 @@ class Plant {
   DataPtr d_;
   Actuation actuation_;
   int substeps_ = 1;
+  long contact_steps_ = 0;
+  double max_contact_force_ = 0;
 };
 
 }  // namespace idmpc::mj

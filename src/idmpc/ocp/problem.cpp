@@ -42,27 +42,38 @@ OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMo
     throw std::invalid_argument("the forward-dynamics problem needs R > 0 on every joint");
   }
   stage_.assign(static_cast<size_t>(N), Data(model));
-  for (Vec* x : {&w_, &gq_, &gv_, &lq_, &lv_, &la_}) *x = Vec::Zero(n);
-  for (VecX<StagePack>* x : {&ql_, &vl_, &al_, &wl_}) *x = VecX<StagePack>::Zero(n);
+  for (Vec* x : {&w_, &gq_, &gv_, &lq_, &lv_, &la_, &d_hat_, &tau_in_}) *x = Vec::Zero(n);
+  for (VecX<StagePack>* x : {&ql_, &vl_, &al_, &wl_, &ul_}) *x = VecX<StagePack>::Zero(n);
   rl_ = VecX<StagePack>::Zero(bounds_.m());
-  // u_ref = ID(q_ref, 0, 0): the torque that holds the target (DESIGN §8)
+  // u_ref = ID(q_ref, 0, 0) − d̂: the torque that holds the target (DESIGN §8, §10)
   const Vec zero = Vec::Zero(n);
-  cost_.set_torque_reference(rnea(model_, stage_[0], cost_.q_ref(), zero, zero));
+  tau_ref_ = rnea(model_, stage_[0], cost_.q_ref(), zero, zero);
+  cost_.set_torque_reference(tau_ref_);
   for (MatX<double>* x : {&gq_all_, &gv_all_, &Mw_all_}) *x = MatX<double>::Zero(n, N);
   set_stages_in_lanes(true);
+}
+
+void OcpProblem::set_disturbance(const Vec& d_hat) {
+  if (d_hat.size() != model_.n || !d_hat.allFinite()) {
+    throw std::invalid_argument("disturbance estimate: expected " + std::to_string(model_.n) +
+                                " finite values, got " + std::to_string(d_hat.size()));
+  }
+  d_hat_ = d_hat;
+  cost_.set_torque_reference(tau_ref_ - d_hat_);
 }
 
 void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
   assert(i >= 0 && i < N_);
   Data& d = stage_[static_cast<size_t>(i)];
   if (formulation_ == Formulation::kForwardDynamics) {
-    output = aba(model_, d, q, v, input);
+    tau_in_ = input + d_hat_;
+    output = aba(model_, d, q, v, tau_in_);
   } else if (mode_ == DerivativeMode::kAdjoint) {
-    output = rnea(model_, d, q, v, input);
+    output = rnea(model_, d, q, v, input) - d_hat_;
   } else {
     // the derivatives' forward pass gives τ too: no separate RNEA
     rnea_derivatives(model_, d, q, v, input);
-    output = d.tau;
+    output = d.tau - d_hat_;
   }
 }
 
@@ -74,6 +85,12 @@ void pack_lanes(const MatX<double>& x, int i0, int count, int shift, VecX<StageP
     const int i = i0 + std::min(k, count - 1) + shift;
     for (Eigen::Index j = 0; j < x.rows(); ++j) out[j][k] = x(j, i);
   }
+}
+
+// the model's torques τ = u + d̂ of the columns of the actuators' torques u, in lanes
+void pack_torque_lanes(const MatX<double>& u, const VecX<double>& d_hat, int i0, int count, VecX<StagePack>& out) {
+  pack_lanes(u, i0, count, 0, out);
+  for (Eigen::Index j = 0; j < u.rows(); ++j) out[j] += d_hat[j];
 }
 
 // column i0 + k of out ← lane k, for the count stages in use
@@ -92,8 +109,8 @@ void OcpProblem::stage_lanes_at_costates(int i0, int count, const MatX<double>& 
   assert(costate_lanes_ && count >= 1 && count <= kStageLanes && i0 + count <= N_);
   pack_lanes(q, i0, count, 0, ql_);
   pack_lanes(v, i0, count, 0, vl_);
-  pack_lanes(u, i0, count, 0, al_);    // the torque, in the acceleration's buffer
-  pack_lanes(gmm, i0, count, 1, wl_);  // γ_{i+1}
+  pack_torque_lanes(u, d_hat_, i0, count, al_);  // the torque, in the acceleration's buffer
+  pack_lanes(gmm, i0, count, 1, wl_);            // γ_{i+1}
   unpack_lanes(aba(model_, lane_data_, ql_, vl_, al_), i0, count, a);
   // μ = M⁻¹γ by the ABA factorization, then the RNEA part of the stage and its adjoint at μ
   const VecX<StagePack>& mu = minv_apply(model_, lane_data_, wl_);
@@ -114,7 +131,7 @@ void OcpProblem::stage_derivative_lanes(int i0, int count, const MatX<double>& q
   const int n = model_.n;
   pack_lanes(q, i0, count, 0, ql_);
   pack_lanes(v, i0, count, 0, vl_);
-  pack_lanes(u, i0, count, 0, al_);  // the torque, in the acceleration's buffer
+  pack_torque_lanes(u, d_hat_, i0, count, al_);  // the torque, in the acceleration's buffer
   aba(model_, lane_data_, ql_, vl_, al_);
   aba_derivatives_after_aba(model_, lane_data_, ql_, vl_);
   for (int k = 0; k < count; ++k) {
@@ -147,14 +164,14 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
   } else {
     rnea_derivatives(model_, lane_data_, ql_, vl_, al_);
   }
-  const VecX<StagePack>& tau = lane_data_.tau;
-  // w = R(u − u_ref) + 2s∘ρ∘(u − ū) on the bounded joints
+  // the actuators' torques u = τ − d̂; w = R(u − u_ref) + 2s∘ρ∘(u − ū) on the bounded joints
+  for (int j = 0; j < n; ++j) ul_[j] = lane_data_.tau[j] - d_hat_[j];
   const VecX<double>& R = cost_.weights().R;
   const VecX<double>& u_ref = cost_.u_ref();
-  for (int j = 0; j < n; ++j) wl_[j] = R[j] * (tau[j] - u_ref[j]);
+  for (int j = 0; j < n; ++j) wl_[j] = R[j] * (ul_[j] - u_ref[j]);
   for (int k = 0; k < m; ++k) {
     const int j = bounds_.joints()[static_cast<size_t>(k)];
-    wl_[j] += (2.0 * bounds_.scale()[k]) * rl_[k] * (tau[j] - bounds_.middle()[k]);
+    wl_[j] += (2.0 * bounds_.scale()[k]) * rl_[k] * (ul_[j] - bounds_.middle()[k]);
   }
   if (adjoint) {
     rnea_vjp(model_, lane_data_, wl_);
@@ -173,7 +190,7 @@ void OcpProblem::stage_dynamics_lanes(int i0, int count, const MatX<double>& q,
       lane_data_.g_a[c] = ga;
     }
   }
-  unpack_lanes(tau, i0, count, u);
+  unpack_lanes(ul_, i0, count, u);
   unpack_lanes(lane_data_.g_q, i0, count, gq_all_);
   unpack_lanes(lane_data_.g_v, i0, count, gv_all_);
   unpack_lanes(lane_data_.g_a, i0, count, Mw_all_);

@@ -59,12 +59,20 @@ class OcpProblem {
   void set_dummy_weight_factor(double f) { bounds_.set_dummy_weight_factor(f); }
   /// @brief m: bounded joints, each with a dummy input and a multiplier per stage.
   int m() const { return bounds_.m(); }
+  /// @brief The estimate d̂ of the joint torque the model misses (DESIGN §10: friction error,
+  /// contacts, payload): the model's joint torque is τ = u + d̂ for the actuators' torque u.
+  /// FD: a = FD(q, v, u + d̂); ID: u = ID(q, v, a) − d̂. The torque reference becomes
+  /// u_ref = ID(q_ref, 0, 0) − d̂ and the torque limits stay on u. Zero until set; size n, finite
+  /// (else std::invalid_argument). Held constant over the horizon.
+  void set_disturbance(const Vec& d_hat);
+  const Vec& disturbance() const { return d_hat_; }
+
   /// @brief Unknowns of one stage: its input (n), dummy inputs d (m), multipliers ρ (m), in
   /// this order; the stage's block F_i of the residual has the same layout.
   int stage_dim() const { return model_.n + 2 * bounds_.m(); }
 
-  /// @brief Stage i's dynamics at (q, v) with its input: FD a = FD(q, v, u) (ABA); ID
-  /// u = ID(q, v, a) (RNEA; in matrix mode with ∂ID/∂q, ∂ID/∂v and M from the same pass).
+  /// @brief Stage i's dynamics at (q, v) with its input: FD a = FD(q, v, u + d̂) (ABA); ID
+  /// u = ID(q, v, a) − d̂ (RNEA; in matrix mode with ∂ID/∂q, ∂ID/∂v and M from the same pass).
   /// The stage's workspace keeps the linearization for stage_hamiltonian.
   void stage_dynamics(int i, In q, In v, In input, Out output);
 
@@ -146,9 +154,13 @@ class OcpProblem {
   bool derivatives_from_lanes_ = false;  ///< stage_[i].da_dq, da_dv, Minv hold stage_derivative_lanes' results
   bool costate_products_ = false;  ///< gq_all_, gv_all_, Mw_all_ (= μ) hold stage_lanes_at_costates' products
 
+  Vec d_hat_;                               ///< disturbance estimate (set_disturbance)
+  Vec tau_ref_;                             ///< ID(q_ref, 0, 0)
+  Vec tau_in_;                              ///< FD: the model's torque u + d̂ of a stage
   std::vector<Data> stage_;                 ///< one dynamics workspace per stage
   DataTpl<StagePack> lane_data_;            ///< workspace of the stages in lanes
   VecX<StagePack> ql_, vl_, al_, wl_, rl_;  ///< stage inputs (rl_: multipliers) packed in lanes
+  VecX<StagePack> ul_;                      ///< ID: the actuators' torques u = τ − d̂ in lanes
   MatX<double> gq_all_, gv_all_, Mw_all_;   ///< per-stage products from the lanes, n × N
   Vec w_, gq_, gv_, lq_, lv_, la_;          ///< stage scratch
 };

@@ -1,5 +1,6 @@
 #include "idmpc/solver/controller.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -19,7 +20,10 @@ Controller::Controller(OcpProblem problem, const CgmresSettings& settings, const
                                 std::to_string(nlp_.n()));
   }
   const int n = nlp_.n();
-  for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_}) *x = Vec::Zero(n);
+  for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_, &q_prev_, &v_prev_, &tau_last_, &tau_pending_,
+                 &d_hat_, &a_meas_}) {
+    *x = Vec::Zero(n);
+  }
   lower_ = Vec::Constant(n, -std::numeric_limits<double>::infinity());
   upper_ = Vec::Constant(n, std::numeric_limits<double>::infinity());
 }
@@ -40,8 +44,40 @@ void Controller::set_torque_limits(const Vec& lower, const Vec& upper) {
   upper_ = upper;
 }
 
+void Controller::set_disturbance_observer(double time_constant) {
+  if (!(time_constant >= 0) || !std::isfinite(time_constant)) {
+    throw std::invalid_argument("disturbance observer: time constant must be >= 0 and finite, got " +
+                                std::to_string(time_constant));
+  }
+  observer_time_constant_ = time_constant;
+}
+
+void Controller::observe(In q, In v) {
+  const double dt = this->dt();
+  if (observer_time_constant_ > 0 && have_previous_) {
+    // the torque the model misses over the last period: model torque at the measured
+    // acceleration minus what the plant applied
+    a_meas_ = (v - v_prev_) / dt;
+    const double beta = std::min(1.0, dt / observer_time_constant_);
+    const Vec& tau_model = rnea(plant_model_, data_, q_prev_, v_prev_, a_meas_);
+    for (int j = 0; j < n(); ++j) {
+      const double raw = tau_model[j] - tau_last_[j];
+      // bounded by what the actuator could counter: a blown-up measurement cannot wind it up
+      const double bound = std::max(std::abs(lower_[j]), std::abs(upper_[j]));
+      d_hat_[j] = std::clamp(d_hat_[j] + beta * (raw - d_hat_[j]), -bound, bound);
+    }
+    if (d_hat_.allFinite()) nlp_.problem().set_disturbance(d_hat_);
+  }
+  q_prev_ = q;
+  v_prev_ = v;
+  have_previous_ = true;
+}
+
 const VecX<double>& Controller::initialize(In q, In v) {
   failure_.clear();
+  have_previous_ = false;
+  d_hat_.setZero();
+  nlp_.problem().set_disturbance(d_hat_);
   try {
     solver_.initialize(0.0, q, v);
   } catch (const std::runtime_error& e) {
@@ -59,11 +95,13 @@ const VecX<double>& Controller::initialize(In q, In v) {
     failure_ = "initialization: non-finite torque";
     tau_.setZero();
   }
+  tau_pending_ = tau_;  // applied over [0, Δt)
   return tau_;
 }
 
 bool Controller::update(double t, In q, In v) {
   failure_.clear();
+  observe(q, v);
   if (!solver_.update(t, q, v)) {
     failure_ = solver_.failure();
     return false;
@@ -75,6 +113,9 @@ bool Controller::update(double t, In q, In v) {
   }
   // the new solution is the one executed from now on
   if (nlp_.formulation() == Formulation::kInverseDynamics) a0_hat_ = solver_.solution().head(n());
+  // the torque of the current period [t, t + Δt) is the one this update's successor observes
+  tau_last_ = tau_pending_;
+  tau_pending_ = tau_;
   return true;
 }
 
@@ -86,7 +127,7 @@ void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
     // delay-compensated inverse dynamics (paper eqs. 27–28)
     q_pred_ = q + dt * v;
     v_pred_ = v + dt * a0_hat;
-    tau_cmd_ = rnea(plant_model_, data_, q_pred_, v_pred_, U0);
+    tau_cmd_ = rnea(plant_model_, data_, q_pred_, v_pred_, U0) - nlp_.problem().disturbance();
   }
   // the plant never receives a torque its actuator cannot give (a non-finite command is a
   // divergence, reported by update)

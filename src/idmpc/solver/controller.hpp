@@ -7,8 +7,14 @@
 /// applied over [t + Δt, t + 2Δt), i.e. one sampling period later; the torque of the
 /// zero-horizon solution at t = 0 is applied over the first period.
 ///   FD: τ = u_0 of the new solution (â_0 is not used).
-///   ID: τ = ID(q + Δt v, v + Δt â_0, a_0), a_0 from the new solution and â_0 the a_0 of the
-///       previous one, which the plant is executing while the controller computes.
+///   ID: τ = ID(q + Δt v, v + Δt â_0, a_0) − d̂, a_0 from the new solution and â_0 the a_0 of
+///       the previous one, which the plant is executing while the controller computes.
+///
+/// Offset-free tracking (DESIGN §10), off unless enabled: a disturbance observer estimates the
+/// joint torque d̂ the model misses from each measured velocity change,
+///   d̂ ← (1 − β) d̂ + β (ID(q⁻, v⁻, (v − v⁻)/Δt) − τ⁻),   β = Δt / T_obs,
+/// with (q⁻, v⁻) the previous measurement and τ⁻ the torque applied over [t − Δt, t) (known from
+/// the timing above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
 
 #include <string>
 
@@ -54,6 +60,14 @@ class Controller {
   const Vec& torque_lower() const { return lower_; }
   const Vec& torque_upper() const { return upper_; }
 
+  /// @brief Turns the disturbance observer on with time constant T_obs [s] (≥ Δt: β = Δt/T_obs),
+  /// or off with 0 (d̂ then stays 0). Throws std::invalid_argument for a negative or non-finite
+  /// value. Takes effect from the next initialize.
+  void set_disturbance_observer(double time_constant);
+  double disturbance_observer() const { return observer_time_constant_; }
+  /// @brief The current estimate d̂ (zero with the observer off).
+  const Vec& disturbance() const { return nlp_.problem().disturbance(); }
+
   /// @brief The torque of the last initialize/update, within the limits: what the plant gets.
   const Vec& torque() const { return tau_; }
   /// @brief The torque the rule commanded before clamping to the limits.
@@ -72,12 +86,19 @@ class Controller {
   // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given), then
   // clamped to the actuator limits
   void torque_rule(In q, In v, In a0_hat, double dt);
+  // the observer's step from the previous measurement to (q, v)
+  void observe(In q, In v);
 
   Shooting nlp_;
   Cgmres solver_;
   const Model& plant_model_;  ///< for the ID torque
   Data data_;                 ///< for the ID torque
   Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;
+  // observer: time constant (0: off), previous measurement, torques over the last and the
+  // current period, the estimate and a scratch acceleration
+  double observer_time_constant_ = 0;
+  bool have_previous_ = false;
+  Vec q_prev_, v_prev_, tau_last_, tau_pending_, d_hat_, a_meas_;
   std::string failure_;
 };
 

@@ -3,7 +3,7 @@
 /// @brief Pack<W>: W doubles operated on together (GCC vector extension), usable as the scalar
 /// of the templated dynamics, so that one RNEA evaluates W horizon stages in SIMD lanes.
 ///
-/// Only arithmetic, sin/cos and sqrt are provided: enough for RNEA, ABA and their adjoints;
+/// Only arithmetic, sin/cos, sqrt and tanh are provided: enough for RNEA, ABA and their adjoints;
 /// comparisons (pivoting, norms) are deliberately absent.
 
 #include <cmath>
@@ -64,6 +64,11 @@ template <int W> struct Pack {
   friend Pack sqrt(const Pack& a) {
     Pack r;
     for (int k = 0; k < W; ++k) r.v[k] = std::sqrt(a.v[k]);
+    return r;
+  }
+  friend Pack tanh(const Pack& a) {
+    Pack r;
+    for (int k = 0; k < W; ++k) r.v[k] = std::tanh(a.v[k]);
     return r;
   }
 };

@@ -1,0 +1,762 @@
+#include "idmpc/mujoco/mjcf_translate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include <tinyxml2.h>
+
+namespace idmpc::mj {
+namespace {
+
+namespace fs = std::filesystem;
+using tinyxml2::XMLElement;
+
+constexpr int kMaxIncludeDepth = 16;
+
+// actuator elements; in MuJoCo's default classes they all set the one actuator default
+const std::set<std::string> kActuatorTags = {"general",  "motor",    "position", "velocity", "intvelocity",
+                                             "damper",   "cylinder", "muscle",   "adhesion", "plugin"};
+const std::set<std::string> kServoShortcuts = {"position", "intvelocity"};
+
+// elements of MuJoCo >= 2.3 with nothing like them in MuJoCo 2.2
+const std::map<std::string, std::string> kNewerElements = {
+    {"replicate", "repeated subtrees are expanded by MuJoCo >= 3.0 only"},
+    {"frame", "frames are a MuJoCo >= 3.0 element"},
+    {"flex", "deformable flex objects do not exist in MuJoCo 2.2"},
+    {"flexcomp", "deformable flex objects do not exist in MuJoCo 2.2"},
+    {"plugin", "engine plugins do not exist in MuJoCo 2.2"},
+    {"extension", "engine plugins do not exist in MuJoCo 2.2"},
+    {"instance", "engine plugins do not exist in MuJoCo 2.2"},
+    {"attach", "model attachment is a MuJoCo >= 3.2 element"},
+    {"layer", "layered textures are a MuJoCo >= 3.2 element"}};
+
+// attributes of MuJoCo >= 2.3 without a MuJoCo 2.2 equivalent (at least at the value given)
+const std::map<std::string, std::string> kNewerAttributes = {
+    {"gravcomp", "gravity compensation forces do not exist in MuJoCo 2.2"},
+    {"actuatorgravcomp", "gravity compensation through the actuators does not exist in MuJoCo 2.2"},
+    {"actearly", "MuJoCo 2.2 always applies the actuator force of the previous activation"},
+    {"actdim", "MuJoCo 2.2 actuators have one activation at most"},
+    {"maxhullvert", "MuJoCo 2.2 always uses the full convex hull of a mesh for collisions"},
+    {"eulerdamp", "MuJoCo 2.2's Euler integrator always treats damping implicitly"},
+    {"nsample", "actuator history (delays) does not exist in MuJoCo 2.2"},
+    {"interp", "actuator history (delays) does not exist in MuJoCo 2.2"},
+    {"delay", "actuator history (delays) does not exist in MuJoCo 2.2"}};
+
+std::string number(double x) {
+  std::ostringstream o;
+  o.precision(10);
+  o << x;
+  return o.str();
+}
+
+std::string trimmed(const std::string& s) {
+  const auto first = s.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return "";
+  return s.substr(first, s.find_last_not_of(" \t\r\n") - first + 1);
+}
+
+std::vector<double> numbers(const std::string& text) {
+  std::vector<double> out;
+  std::istringstream in(text);
+  double x;
+  while (in >> x) out.push_back(x);
+  return out;
+}
+
+// one file of the model
+struct Source {
+  std::string path;
+  std::unique_ptr<tinyxml2::XMLDocument> doc;
+  bool changed = false;
+};
+
+// an element of the model with includes expanded: its logical parent is the element holding
+// the <include>
+struct Node {
+  XMLElement* e = nullptr;
+  Source* src = nullptr;
+  Node* parent = nullptr;
+  std::vector<Node*> children;
+  std::string tag() const { return e->Name(); }
+  std::string get(const char* name, const std::string& fallback = "") const {
+    const char* v = e->Attribute(name);
+    return v ? v : fallback;
+  }
+  bool has(const char* name) const { return e->Attribute(name) != nullptr; }
+};
+
+class MjcfTree {
+ public:
+  explicit MjcfTree(const std::string& path) : main_dir_(fs::path(path).parent_path()) {
+    Source* main = load(path);
+    if (!main) return;
+    XMLElement* root = main->doc->RootElement();
+    if (!root || std::string(root->Name()) != "mujoco") return;
+    root_ = make(root, main, nullptr);
+    expand(root_, root, main, 0);
+    ok_ = true;
+  }
+  bool ok() const { return ok_; }
+  Node* root() const { return root_; }
+  std::vector<std::unique_ptr<Source>>& sources() { return sources_; }
+
+  // "<joint> 'j1', line 12" (or "…, arm.xml line 12" in an included file)
+  std::string where(const Node* n) const {
+    std::string out = "<" + n->tag() + ">";
+    if (n->has("name")) out += " '" + n->get("name") + "'";
+    if (n->has("class") && n->tag() == "default") out += " '" + n->get("class") + "'";
+    out += ", ";
+    if (n->src != sources_.front().get()) out += n->src->path + " ";
+    return out + "line " + std::to_string(n->e->GetLineNum());
+  }
+
+ private:
+  Source* load(const std::string& path) {
+    auto src = std::make_unique<Source>();
+    src->path = path;
+    src->doc = std::make_unique<tinyxml2::XMLDocument>(true, tinyxml2::PRESERVE_WHITESPACE);
+    if (src->doc->LoadFile(path.c_str()) != tinyxml2::XML_SUCCESS) return nullptr;
+    sources_.push_back(std::move(src));
+    return sources_.back().get();
+  }
+  Node* make(XMLElement* e, Source* src, Node* parent) {
+    nodes_.push_back(std::make_unique<Node>());
+    Node* n = nodes_.back().get();
+    n->e = e;
+    n->src = src;
+    n->parent = parent;
+    if (parent) parent->children.push_back(n);
+    return n;
+  }
+  // children of `xml` (in `src`) become children of `node`; an <include> is replaced by the
+  // children of the included file's root, as MuJoCo does
+  void expand(Node* node, XMLElement* xml, Source* src, int depth) {
+    for (XMLElement* c = xml->FirstChildElement(); c; c = c->NextSiblingElement()) {
+      if (std::string(c->Name()) == "include" && c->Attribute("file")) {
+        const fs::path file(c->Attribute("file"));
+        const std::string path = (file.is_absolute() ? file : main_dir_ / file).string();
+        Source* inc = depth < kMaxIncludeDepth ? load(path) : nullptr;
+        // an unreadable include is MuJoCo's to report
+        if (inc && inc->doc->RootElement()) expand(node, inc->doc->RootElement(), inc, depth + 1);
+        continue;
+      }
+      expand(make(c, src, node), c, src, depth);
+    }
+  }
+
+  fs::path main_dir_;
+  std::vector<std::unique_ptr<Source>> sources_;
+  std::vector<std::unique_ptr<Node>> nodes_;
+  Node* root_ = nullptr;
+  bool ok_ = false;
+};
+
+// --------------------------------------------------------------------------------------------
+// default classes
+
+class Defaults {
+ public:
+  explicit Defaults(Node* root) {
+    for (Node* c : root->children) {
+      if (c->tag() == "default") add(c, "");
+    }
+  }
+  // the class an element uses: its own, else (in the body tree) the nearest childclass
+  static std::string class_of(const Node* n) {
+    if (n->has("class")) return n->get("class");
+    for (const Node* p = n->parent; p; p = p->parent) {
+      if (p->has("childclass")) return p->get("childclass");
+    }
+    return "main";
+  }
+  // the value of `name` for element `n` (of one of `tags` in defaults), with the node that gives
+  // it: the element itself, else the nearest class defining it (within a class, the last)
+  std::optional<std::pair<std::string, const Node*>> resolve(const Node* n, const std::set<std::string>& tags,
+                                                              const char* name) const {
+    if (n->has(name)) return std::make_pair(n->get(name), n);
+    for (std::string cls = class_of(n); !cls.empty();) {
+      const auto it = classes_.find(cls);
+      if (it == classes_.end()) break;
+      const Node* d = it->second.node;
+      for (auto c = d->children.rbegin(); c != d->children.rend(); ++c) {
+        if (tags.count((*c)->tag()) && (*c)->has(name)) return std::make_pair((*c)->get(name), *c);
+      }
+      cls = it->second.parent;
+    }
+    return std::nullopt;
+  }
+  // class chain of `n`, nearest first
+  std::vector<const Node*> chain(const Node* n) const {
+    std::vector<const Node*> out;
+    for (std::string cls = class_of(n); !cls.empty();) {
+      const auto it = classes_.find(cls);
+      if (it == classes_.end()) break;
+      out.push_back(it->second.node);
+      cls = it->second.parent;
+    }
+    return out;
+  }
+
+ private:
+  struct Class {
+    const Node* node;
+    std::string parent;
+  };
+  void add(const Node* d, const std::string& parent) {
+    const std::string name = d->get("class", parent.empty() ? "main" : "");
+    classes_[name] = Class{d, parent};
+    for (const Node* c : d->children) {
+      if (c->tag() == "default") add(c, name);
+    }
+  }
+  std::map<std::string, Class> classes_;
+};
+
+// --------------------------------------------------------------------------------------------
+// the text MuJoCo parses: every element on the line it had, so that MuJoCo's messages name the
+// user's lines
+
+class LinePrinter {
+ public:
+  std::string print(const tinyxml2::XMLDocument& doc) {
+    for (const tinyxml2::XMLNode* n = doc.FirstChild(); n; n = n->NextSibling()) node(n);
+    out_ += '\n';
+    return out_;
+  }
+
+ private:
+  void pad(int line) {
+    for (; line_ < line; ++line_) out_ += '\n';
+  }
+  void emit(const std::string& s) {
+    out_ += s;
+    line_ += static_cast<int>(std::count(s.begin(), s.end(), '\n'));
+  }
+  static std::string escape(const char* s, bool attribute) {
+    std::string out;
+    for (; *s; ++s) {
+      switch (*s) {
+        case '&': out += "&amp;"; break;
+        case '<': out += "&lt;"; break;
+        case '>': out += attribute ? ">" : "&gt;"; break;
+        case '"': out += attribute ? "&quot;" : "\""; break;
+        default: out += *s;
+      }
+    }
+    return out;
+  }
+  void node(const tinyxml2::XMLNode* n) {
+    if (const XMLElement* e = n->ToElement()) {
+      if (e->GetLineNum() > 0) pad(e->GetLineNum());
+      emit(std::string("<") + e->Name());
+      for (const tinyxml2::XMLAttribute* a = e->FirstAttribute(); a; a = a->Next()) {
+        emit(std::string(" ") + a->Name() + "=\"" + escape(a->Value(), true) + "\"");
+      }
+      if (!e->FirstChild()) {
+        emit("/>");
+        return;
+      }
+      emit(">");
+      for (const tinyxml2::XMLNode* c = e->FirstChild(); c; c = c->NextSibling()) node(c);
+      emit(std::string("</") + e->Name() + ">");
+    } else if (const tinyxml2::XMLText* t = n->ToText()) {
+      emit(t->CData() ? std::string("<![CDATA[") + t->Value() + "]]>" : escape(t->Value(), false));
+    } else if (n->ToComment()) {
+      pad(n->GetLineNum());
+      emit(std::string("<!--") + n->Value() + "-->");
+    } else if (n->ToDeclaration()) {
+      pad(n->GetLineNum());
+      emit(std::string("<?") + n->Value() + "?>");
+    } else if (n->ToUnknown()) {
+      pad(n->GetLineNum());
+      emit(std::string("<!") + n->Value() + ">");
+    }
+  }
+  std::string out_;
+  int line_ = 1;
+};
+
+// --------------------------------------------------------------------------------------------
+// the translation
+
+class Translator {
+ public:
+  Translator(MjcfTree& model, MjcfTranslation& out) : model_(model), defaults_(model.root()), out_(out) {}
+
+  void run() {
+    collect(model_.root());
+    // everything is resolved on the file as written, before any edit
+    plan_autolimits();
+    plan_actuators();
+    plan_joints();
+    scan_newer_names();
+    edit_text();
+  }
+
+ private:
+  void collect(Node* n) {
+    for (Node* c : n->children) {
+      const std::string tag = c->tag();
+      if (tag == "compiler") compilers_.push_back(c);
+      if (tag == "actuator" && n == model_.root()) {
+        for (Node* a : c->children) actuators_.push_back(a);
+      }
+      if (tag == "tendon" && n == model_.root()) {
+        for (Node* t : c->children) tendons_.push_back(t);
+      }
+      if (tag == "worldbody" && n == model_.root()) bodies(c);
+      all_.push_back(c);
+      collect(c);
+    }
+  }
+  // joints in MuJoCo's order: bodies depth first in document order, each body's joints in order
+  void bodies(Node* body) {
+    for (Node* c : body->children) {
+      if (c->tag() == "joint" || c->tag() == "freejoint") joints_.push_back(c);
+    }
+    for (Node* c : body->children) {
+      if (c->tag() != "body") continue;
+      body_id_[c] = next_body_++;  // MuJoCo numbers bodies in this depth-first order
+      bodies(c);
+    }
+  }
+
+  std::optional<std::pair<std::string, const Node*>> resolve(const Node* n, const std::set<std::string>& tags,
+                                                              const char* name) const {
+    return defaults_.resolve(n, tags, name);
+  }
+  bool autolimits_given() const {
+    return std::any_of(compilers_.begin(), compilers_.end(), [](const Node* c) { return c->has("autolimits"); });
+  }
+  // MuJoCo >= 2.3 limits a range given without its flag unless the file says autolimits="false"
+  bool autolimits_on() const {
+    bool on = true;
+    for (const Node* c : compilers_) {
+      if (c->has("autolimits")) on = c->get("autolimits") == "true";
+    }
+    return on;
+  }
+
+  void plan_autolimits() {
+    if (autolimits_given()) return;
+    std::vector<std::string> ranged;
+    auto check = [&](const Node* n, const std::set<std::string>& tags, const char* range, const char* flag) {
+      if (resolve(n, tags, range) && !resolve(n, tags, flag)) {
+        ranged.push_back(n->tag() + (n->has("name") ? " '" + n->get("name") + "'" : "") + " " + range);
+      }
+    };
+    for (const Node* j : joints_) check(j, {"joint"}, "range", "limited");
+    for (const Node* t : tendons_) check(t, {"tendon"}, "range", "limited");
+    for (const Node* a : actuators_) {
+      check(a, kActuatorTags, "ctrlrange", "ctrllimited");
+      check(a, kActuatorTags, "forcerange", "forcelimited");
+      check(a, kActuatorTags, "actrange", "actlimited");
+    }
+    if (ranged.empty()) return;
+    set_autolimits_ = true;
+    std::string list;
+    for (std::size_t k = 0; k < ranged.size() && k < 3; ++k) list += (k ? ", " : "") + ranged[k];
+    if (ranged.size() > 3) list += " and " + std::to_string(ranged.size() - 3) + " more";
+    out_.notices.push_back("<compiler autolimits> set to true, MuJoCo >= 2.3's default (2.2's is false): " +
+                           std::to_string(ranged.size()) + " range(s) without their limited flag limit (" +
+                           list + ")");
+  }
+
+  // biasprm[2] of a position/intvelocity shortcut as MuJoCo >= 2.3 resolves it: the element's
+  // kv or dampratio, else the nearest class's (a shortcut's kv/dampratio, a general's biasprm,
+  // a velocity's kv); MuJoCo 2.2's shortcut clears it
+  std::optional<std::pair<double, std::string>> servo_bias(const Node* a) const {
+    auto from = [&](const Node* n) -> std::optional<std::pair<double, std::string>> {
+      const std::string where = n == a ? "" : " (class '" + Defaults::class_of(a) + "', " + model_.where(n) + ")";
+      const std::string tag = n->tag();
+      if (kServoShortcuts.count(tag) && n->has("kv")) {
+        return std::make_pair(-std::atof(n->get("kv").c_str()), "kv " + n->get("kv") + where);
+      }
+      if (kServoShortcuts.count(tag) && n->has("dampratio")) {
+        return std::make_pair(std::atof(n->get("dampratio").c_str()), "dampratio " + n->get("dampratio") + where);
+      }
+      if (n == a) return std::nullopt;
+      if (tag == "general" && n->has("biasprm")) {
+        const std::vector<double> b = numbers(n->get("biasprm"));
+        if (b.size() >= 3) return std::make_pair(b[2], "biasprm[2] " + number(b[2]) + where);
+      }
+      if (tag == "velocity" && n->has("kv")) {
+        return std::make_pair(-std::atof(n->get("kv").c_str()), "kv " + n->get("kv") + " of a <velocity>" + where);
+      }
+      return std::nullopt;
+    };
+    if (auto own = from(a)) return own;
+    for (const Node* d : defaults_.chain(a)) {
+      for (auto c = d->children.rbegin(); c != d->children.rend(); ++c) {
+        if (!kActuatorTags.count((*c)->tag())) continue;
+        if (auto v = from(*c)) return v;
+      }
+    }
+    return std::nullopt;
+  }
+
+  void plan_actuators() {
+    for (std::size_t u = 0; u < actuators_.size(); ++u) {
+      const Node* a = actuators_[u];
+      if (!kServoShortcuts.count(a->tag())) continue;
+      ActuatorPatch p;
+      p.actuator = static_cast<int>(u);
+      p.where = model_.where(a);
+      p.activation = a->tag() == "intvelocity";
+      if (a->has("kv") && a->has("dampratio")) {
+        untranslatable(a, "kv", "kv and dampratio cannot both be given (MuJoCo >= 2.3 refuses it too)");
+      }
+      if (const auto bias = servo_bias(a); bias && bias->first != 0) {
+        p.set_bias = true;
+        p.bias = bias->first;
+        p.bias_source = bias->second;
+      }
+      if (const auto r = resolve(a, kServoShortcuts, "inheritrange")) {
+        p.inheritrange = std::atof(r->first.c_str());
+        const char* range = p.activation ? "actrange" : "ctrlrange";
+        const auto given = resolve(a, kActuatorTags, range);
+        if (p.inheritrange > 0 && given) {
+          const std::vector<double> v = numbers(given->first);
+          if (std::any_of(v.begin(), v.end(), [](double x) { return x != 0; })) {
+            untranslatable(a, "inheritrange", std::string(range) + " and inheritrange cannot both be given " +
+                                                  "(MuJoCo >= 2.3 refuses it too)");
+            p.inheritrange = 0;
+          }
+        }
+      }
+      if (p.set_bias || p.inheritrange > 0) out_.actuators.push_back(p);
+    }
+  }
+
+  void plan_joints() {
+    for (std::size_t j = 0; j < joints_.size(); ++j) {
+      const Node* n = joints_[j];
+      const auto range = resolve(n, {"joint"}, "actuatorfrcrange");
+      if (!range) continue;
+      const auto flag = resolve(n, {"joint"}, "actuatorfrclimited");
+      const bool limited = flag ? flag->first == "true" : autolimits_on();
+      const std::vector<double> v = numbers(range->first);
+      if (!limited || v.size() != 2) continue;
+      out_.joints.push_back(JointForcePatch{static_cast<int>(j), model_.where(n), v[0], v[1]});
+    }
+  }
+
+  void untranslatable(const Node* n, const std::string& name, const std::string& why) {
+    const std::string item = n->tag() == name ? "element " + model_.where(n) + ": " + why
+                                              : "attribute '" + name + "' (" + model_.where(n) + "): " + why;
+    if (std::find(out_.untranslatable.begin(), out_.untranslatable.end(), item) == out_.untranslatable.end()) {
+      out_.untranslatable.push_back(item);
+    }
+  }
+
+  // what to do with each name of MuJoCo >= 2.3 that MuJoCo 2.2 rejects
+  void scan_newer_names() {
+    for (Node* n : all_) {
+      const std::string tag = n->tag();
+      if (const auto it = kNewerElements.find(tag); it != kNewerElements.end()) {
+        untranslatable(n, tag, it->second);
+        remove_element_.push_back(n);
+        continue;
+      }
+      for (const tinyxml2::XMLAttribute* a = n->e->FirstAttribute(); a; a = a->Next()) {
+        const std::string name = a->Name(), value = a->Value();
+        if ((name == "kv" || name == "dampratio" || name == "inheritrange") && kServoShortcuts.count(tag)) {
+          remove_attr_.emplace_back(n, name);  // translated in the compiled model
+        } else if ((name == "actuatorfrcrange" || name == "actuatorfrclimited") && tag == "joint") {
+          remove_attr_.emplace_back(n, name);  // translated in the compiled model
+        } else if (name == "integrator" && value == "implicitfast") {
+          set_attr_.push_back({n, name, "implicit"});
+          out_.notices.push_back("integrator implicitfast replaced by implicit (" + model_.where(n) +
+                                 "), a different integrator: MuJoCo 2.2 has no implicitfast, and implicit also "
+                                 "keeps the Coriolis and centrifugal derivatives implicitfast leaves out");
+        } else if (name == "assetdir" && tag == "compiler") {
+          for (const char* dir : {"meshdir", "texturedir"}) {
+            if (!n->has(dir)) set_attr_.push_back({n, dir, value});
+          }
+          remove_attr_.emplace_back(n, name);
+          out_.notices.push_back("<compiler assetdir=\"" + value + "\"> given as meshdir and texturedir (" +
+                                 model_.where(n) + ")");
+        } else if (name == "resolution" && tag == "camera") {
+          remove_attr_.emplace_back(n, name);
+          out_.notices.push_back("camera resolution dropped (" + model_.where(n) +
+                                 "): MuJoCo 2.2 cameras have none and nothing MuJoCo 2.2 computes uses it");
+        } else if (name == "gravcomp" && tag == "body" && body_id_.count(n) && std::atof(value.c_str()) != 0) {
+          // exact only when it compensates every moving body fully: checked on the compiled model
+          remove_attr_.emplace_back(n, name);
+          out_.gravcomp.push_back(GravcompPatch{body_id_.at(n), model_.where(n), std::atof(value.c_str())});
+        } else if (const auto it = kNewerAttributes.find(name); it != kNewerAttributes.end()) {
+          const bool no_op = (name == "gravcomp" && std::atof(value.c_str()) == 0 && !trimmed(value).empty()) ||
+                             ((name == "actuatorgravcomp" || name == "actearly") && value == "false") ||
+                             (name == "eulerdamp" && value == "enable");
+          remove_attr_.emplace_back(n, name);
+          if (no_op) {
+            out_.notices.push_back(name + "=\"" + value + "\" dropped (" + model_.where(n) +
+                                   "): MuJoCo 2.2 behaves so without it");
+          } else {
+            untranslatable(n, name, it->second);
+          }
+        }
+      }
+      if (tag == "key") {
+        for (const char* key : {"time", "qpos", "qvel", "act", "ctrl", "mpos", "mquat"}) {
+          const std::string v = n->get(key);
+          if (n->has(key) && trimmed(v) != v) {
+            set_attr_.push_back({n, key, trimmed(v)});
+            out_.notices.push_back(std::string("keyframe ") + key + " trimmed of surrounding blanks (" +
+                                   model_.where(n) + "): MuJoCo 2.2 reads a trailing blank as a missing number");
+          }
+        }
+      }
+    }
+  }
+
+  void edit_text() {
+    if (set_autolimits_) {
+      if (!compilers_.empty()) {
+        compilers_.front()->e->SetAttribute("autolimits", "true");
+        compilers_.front()->src->changed = true;
+      } else {
+        XMLElement* root = model_.root()->e;
+        XMLElement* compiler = root->GetDocument()->NewElement("compiler");
+        compiler->SetAttribute("autolimits", "true");
+        root->InsertFirstChild(compiler);
+        model_.root()->src->changed = true;
+      }
+    }
+    for (const Assignment& s : set_attr_) {
+      s.node->e->SetAttribute(s.name.c_str(), s.value.c_str());
+      s.node->src->changed = true;
+    }
+    for (const auto& [n, name] : remove_attr_) {
+      n->e->DeleteAttribute(name.c_str());
+      n->src->changed = true;
+    }
+    for (Node* n : remove_element_) {
+      if (XMLElement* parent = n->e->Parent() ? n->e->Parent()->ToElement() : nullptr) {
+        parent->DeleteChild(n->e);
+        n->src->changed = true;
+      }
+    }
+    for (const auto& src : model_.sources()) {
+      if (src->changed) out_.files.emplace_back(src->path, LinePrinter().print(*src->doc));
+    }
+  }
+
+  struct Assignment {
+    Node* node;
+    std::string name, value;
+  };
+
+  MjcfTree& model_;
+  Defaults defaults_;
+  MjcfTranslation& out_;
+  std::vector<Node*> all_, compilers_, actuators_, tendons_, joints_;
+  std::map<const Node*, int> body_id_;
+  int next_body_ = 1;
+  std::vector<Assignment> set_attr_;
+  std::vector<std::pair<Node*, std::string>> remove_attr_;
+  std::vector<Node*> remove_element_;
+  bool set_autolimits_ = false;
+};
+
+// --------------------------------------------------------------------------------------------
+// after compilation
+
+std::string actuator_label(const mjModel* m, int u) {
+  const char* name = mj_id2name(m, mjOBJ_ACTUATOR, u);
+  return std::string("actuator '") + (name && name[0] ? name : "#" + std::to_string(u)) + "'";
+}
+
+std::string joint_label(const mjModel* m, int j) {
+  const char* name = mj_id2name(m, mjOBJ_JOINT, j);
+  return std::string("joint '") + (name && name[0] ? name : "#" + std::to_string(j)) + "'";
+}
+
+std::string range_text(double lo, double hi) { return "[" + number(lo) + ", " + number(hi) + "]"; }
+
+}  // namespace
+
+namespace {
+
+// gravcomp = 1 on every body that moves and has mass cancels gravity exactly: the same model with
+// zero gravity. Anything less (some bodies, or a fraction) has no MuJoCo 2.2 equivalent: one gravity
+// acts on every body.
+void apply_gravcomp(mjModel* m, const std::vector<GravcompPatch>& patches, std::vector<std::string>& notices,
+                    std::vector<std::string>& untranslatable) {
+  if (patches.empty()) return;
+  std::vector<double> value(static_cast<std::size_t>(m->nbody), 0.0);
+  for (const GravcompPatch& p : patches) {
+    if (p.body > 0 && p.body < m->nbody) value[static_cast<std::size_t>(p.body)] = p.value;
+  }
+  std::string partial;
+  for (int b = 1; b < m->nbody; ++b) {
+    const bool moves = m->body_weldid[b] != 0, massive = m->body_mass[b] > 0;
+    if (moves && massive && value[static_cast<std::size_t>(b)] != 1) {
+      partial = "body '" + std::string(mj_id2name(m, mjOBJ_BODY, b) ? mj_id2name(m, mjOBJ_BODY, b) : "#" + std::to_string(b)) +
+                "' has gravcomp " + number(value[static_cast<std::size_t>(b)]);
+      break;
+    }
+  }
+  if (!partial.empty()) {
+    for (const GravcompPatch& p : patches) {
+      untranslatable.push_back("attribute 'gravcomp' (" + p.where + "): MuJoCo 2.2 has one gravity for all bodies, "
+                               "so only gravcomp 1 on every moving body has an equivalent (" + partial + ")");
+    }
+    return;
+  }
+  notices.push_back("gravcomp 1 on every moving body (" + patches.front().where + " and " +
+                    std::to_string(patches.size() - 1) +
+                    " more): gravity fully compensated, the same dynamics as gravity 0, which it is set to");
+  mju_zero(m->opt.gravity, 3);
+}
+
+}  // namespace
+
+MjcfTranslation translate_mjcf(const std::string& path) {
+  MjcfTranslation out;
+  MjcfTree model(path);
+  if (!model.ok()) return out;
+  Translator(model, out).run();
+  return out;
+}
+
+JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::vector<std::string>& notices,
+                                   std::vector<std::string>& untranslatable) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  JointForceRanges ranges{std::vector<double>(m->njnt, -kInf), std::vector<double>(m->njnt, kInf)};
+  apply_gravcomp(m, t.gravcomp, notices, untranslatable);
+  if (t.actuators.empty() && t.joints.empty()) return ranges;
+  const int nv = m->nv;
+  // actuator moments at qpos0, as MuJoCo's compiler computes them
+  mjData* d = mj_makeData(m);
+  if (!d) throw std::runtime_error("MuJoCo could not allocate mjData");
+  mju_copy(d->qpos, m->qpos0, m->nq);
+  mj_kinematics(m, d);
+  mj_comPos(m, d);
+  mj_tendon(m, d);
+  mj_transmission(m, d);
+  const std::vector<mjtNum> moment(d->actuator_moment, d->actuator_moment + static_cast<std::size_t>(m->nu) * nv);
+  mj_deleteData(d);
+
+  for (const ActuatorPatch& p : t.actuators) {
+    if (p.actuator >= m->nu) continue;
+    const int u = p.actuator;
+    const std::string label = actuator_label(m, u) + " (" + p.where + ")";
+    if (p.inheritrange > 0) {
+      const int type = m->actuator_trntype[u], id = m->actuator_trnid[2 * u];
+      const mjtNum* range = nullptr;
+      bool limited = false;
+      if ((type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT) &&
+          (m->jnt_type[id] == mjJNT_HINGE || m->jnt_type[id] == mjJNT_SLIDE)) {
+        range = m->jnt_range + 2 * id;
+        limited = m->jnt_limited[id];
+      } else if (type == mjTRN_TENDON) {
+        range = m->tendon_range + 2 * id;
+        limited = m->tendon_limited[id];
+      }
+      if (!range || !limited) {
+        untranslatable.push_back("attribute 'inheritrange' (" + p.where +
+                                 "): its target is no hinge, slide or tendon with a range (MuJoCo >= 2.3 refuses "
+                                 "it too)");
+      } else {
+        const double centre = 0.5 * (range[1] + range[0]), radius = 0.5 * (range[1] - range[0]) * p.inheritrange;
+        mjtNum* target = (p.activation ? m->actuator_actrange : m->actuator_ctrlrange) + 2 * u;
+        target[0] = centre - radius;
+        target[1] = centre + radius;
+        (p.activation ? m->actuator_actlimited : m->actuator_ctrllimited)[u] = 1;
+        notices.push_back(label + ": inheritrange " + number(p.inheritrange) + " gives " +
+                          (p.activation ? "actrange " : "ctrlrange ") + range_text(target[0], target[1]));
+      }
+    }
+    if (p.set_bias) {
+      mjtNum* bias = m->actuator_biasprm + u * mjNBIAS;
+      const double kp = m->actuator_gainprm[u * mjNGAIN];
+      if (p.bias < 0) {
+        bias[2] = p.bias;
+        notices.push_back(label + ": " + p.bias_source + " gives biasprm[2] = " + number(bias[2]));
+      } else {
+        // MuJoCo >= 2.3: damping = dampratio·2·√(kp·m), m the inertia reflected through the
+        // transmission at qpos0
+        double mass = 0;
+        for (int j = 0; j < nv; ++j) {
+          const double trn = std::abs(moment[static_cast<std::size_t>(u) * nv + j]);
+          if (trn * trn > mjMINVAL) mass += m->dof_M0[j] / (trn * trn);
+        }
+        bias[2] = -p.bias * 2 * std::sqrt(kp * mass);
+        notices.push_back(label + ": " + p.bias_source + " gives kv " + number(-bias[2]) +
+                          " (biasprm[2], from the inertia " + number(mass) + " at qpos0)");
+      }
+    }
+  }
+
+  for (const JointForcePatch& p : t.joints) {
+    if (p.joint >= m->njnt) continue;
+    const int j = p.joint;
+    const std::string label = joint_label(m, j) + " (" + p.where + ")";
+    if (!(p.lower <= p.upper)) {
+      untranslatable.push_back("attribute 'actuatorfrcrange' (" + p.where + "): the range " +
+                               range_text(p.lower, p.upper) + " is empty");
+      continue;
+    }
+    const int dof = m->jnt_dofadr[j];
+    std::vector<int> drivers;
+    bool other = false;
+    for (int u = 0; u < m->nu; ++u) {
+      const int type = m->actuator_trntype[u];
+      if (type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT) {
+        if (m->actuator_trnid[2 * u] == j) drivers.push_back(u);
+      } else if (type != mjTRN_TENDON || moment[static_cast<std::size_t>(u) * nv + dof] != 0) {
+        // tendons through the joint, and transmissions whose moment depends on the state
+        drivers.push_back(u);
+        other = true;
+      }
+    }
+    if (drivers.empty()) {
+      ranges.lower[j] = p.lower;
+      ranges.upper[j] = p.upper;
+      notices.push_back(label + ": actuatorfrcrange " + range_text(p.lower, p.upper) +
+                        " kept as the joint's torque range (no actuator drives it)");
+      continue;
+    }
+    const int u = drivers.front();
+    const double gear = m->actuator_gear[6 * u];
+    if (drivers.size() > 1 || other || !(std::abs(gear) > 0)) {
+      std::string names;
+      for (int k : drivers) names += (names.empty() ? "" : ", ") + actuator_label(m, k);
+      untranslatable.push_back("attribute 'actuatorfrcrange' (" + p.where +
+                               "): it clamps the sum of the forces of " + names +
+                               ", and MuJoCo 2.2 can only clamp each joint actuator's own force");
+      continue;
+    }
+    double lo = std::min(p.lower / gear, p.upper / gear), hi = std::max(p.lower / gear, p.upper / gear);
+    mjtNum* fr = m->actuator_forcerange + 2 * u;
+    if (m->actuator_forcelimited[u]) {
+      lo = std::max(lo, fr[0]);
+      hi = std::min(hi, fr[1]);
+    }
+    if (!(lo <= hi)) {
+      untranslatable.push_back("attribute 'actuatorfrcrange' (" + p.where + "): " +
+                               range_text(p.lower, p.upper) + " and the forcerange of " + actuator_label(m, u) +
+                               " do not overlap");
+      continue;
+    }
+    fr[0] = lo;
+    fr[1] = hi;
+    m->actuator_forcelimited[u] = 1;
+    notices.push_back(label + ": actuatorfrcrange " + range_text(p.lower, p.upper) + " becomes forcerange " +
+                      range_text(lo, hi) + " of " + actuator_label(m, u) + ", its only actuator (gear " +
+                      number(gear) + ")");
+  }
+  return ranges;
+}
+
+}  // namespace idmpc::mj
