@@ -16,6 +16,11 @@
 
 namespace idmpc::app {
 
+int& command_exit_code() {
+  static int code = 0;
+  return code;
+}
+
 void register_swingup(CLI::App& app) {
   struct Options {
     TaskOverrides run;
@@ -56,6 +61,7 @@ void register_swingup(CLI::App& app) {
     if (!opt->log.empty()) std::cout << "  log: " << opt->log << "\n";
     if (!opt->summary.empty()) std::cout << "  summary: " << opt->summary << "\n";
     std::cout << std::flush;
+    command_exit_code() = out.summary.diverged ? kDiverged : out.summary.reached ? kReached : kNotReached;
 #ifdef IDMPC_HAVE_RENDER
     if (!opt->video.empty()) {
       struct Cleanup {

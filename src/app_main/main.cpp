@@ -112,5 +112,5 @@ int main(int argc, char** argv) {
     std::cerr << "idmpc: error: " << one_line(e.what()) << "\n";
     return 1;
   }
-  return 0;
+  return idmpc::app::command_exit_code();
 }

@@ -414,7 +414,7 @@ TEST_F(Cli, SwingupRefusesAnUnwritableSummaryBeforeRunning) {
 
 TEST_F(Cli, SwingupWritesLogAndSummary) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.2 --log log.csv --summary summary.json");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 2) << r.err;
   expect_no_temporaries();
 
   // the log: the documented header, one row per 1 ms control step, all numbers
@@ -465,10 +465,27 @@ TEST_F(Cli, SwingupWritesLogAndSummary) {
   EXPECT_NE(r.out.find("log.csv"), std::string::npos) << r.out;
 }
 
-TEST_F(Cli, SwingupReportsDivergenceWithExitZeroAndKeepsTheLog) {
+// the exit code says whether the target was reached (0), not reached (2) or the run diverged (3,
+// above); the summary and the screen say the same, with the tolerance
+TEST_F(Cli, SwingupExitCodeSaysWhetherTheTargetWasReached) {
+  const Result held = idmpc("swingup " + quote(kArm4) + " --q0 0 0 0 0 --qref 0 --duration 0.05 --summary a.json");
+  EXPECT_EQ(held.code, 0) << held.err;
+  EXPECT_NE(held.out.find("target REACHED (max|q - qref| < 0.001 at the end)"), std::string::npos) << held.out;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "a.json"))["reached"], true);
+  const Result strict = idmpc("swingup " + quote(kArm4) +
+                              " --q0 0 0 0 0 --qref 0.01 --duration 0.05 --reach-tolerance 1e-3 --summary b.json");
+  EXPECT_EQ(strict.code, 2) << strict.err;
+  EXPECT_NE(strict.out.find("target NOT reached (max|q - qref| < 0.001 at the end)"), std::string::npos) << strict.out;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "b.json"))["reached"], false);
+  const Result loose = idmpc("swingup " + quote(kArm4) +
+                             " --q0 0 0 0 0 --qref 0.01 --duration 0.05 --reach-tolerance 0.1 --summary c.json");
+  EXPECT_EQ(loose.code, 0) << loose.err;
+}
+
+TEST_F(Cli, SwingupReportsDivergenceWithItsExitCodeAndKeepsTheLog) {
   const Result r = idmpc("swingup " + quote(kArm4) +
                          " --formulation fd --zeta 1e9 --duration 0.2 --log log.csv --summary summary.json");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 3) << r.err;
   const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "summary.json"));
   EXPECT_EQ(s["diverged"], true);
   ASSERT_TRUE(s["diverged_at"].is_number());
@@ -487,7 +504,7 @@ TEST_F(Cli, SwingupReportsDivergencesTheControllerCannotActOn) {
   for (const auto& [option, reason] : cases) {
     SCOPED_TRACE(option);
     const Result r = idmpc("swingup " + quote(kArm4) + " " + option + " --duration 0.2 --log log.csv --summary s.json");
-    ASSERT_EQ(r.code, 0) << r.err;
+    ASSERT_EQ(r.code, 3) << r.err;
     const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
     EXPECT_EQ(s["diverged"], true);
     EXPECT_NE(s["divergence_reason"].get<std::string>().find(reason), std::string::npos) << s["divergence_reason"];
@@ -506,7 +523,7 @@ TEST_F(Cli, SwingupReportsDivergencesTheControllerCannotActOn) {
 // the hint names the options that apply to the task; --fallback applies the paper's Q_a rule
 TEST_F(Cli, SwingupFallbackRerunsADivergedIdRunWithTheTasksQa) {
   const Result plain = idmpc("swingup " + quote(kArm4) + " --R 1e-9 --duration 0.05 --summary a.json");
-  ASSERT_EQ(plain.code, 0) << plain.err;
+  ASSERT_EQ(plain.code, 3) << plain.err;
   const nlohmann::json a = nlohmann::json::parse(slurp(dir_ / "a.json"));
   ASSERT_EQ(a["diverged"], true);
   const std::string hint = a["divergence_hint"];
@@ -514,7 +531,7 @@ TEST_F(Cli, SwingupFallbackRerunsADivergedIdRunWithTheTasksQa) {
     EXPECT_NE(hint.find(option), std::string::npos) << option << " not in: " << hint;
   }
   const Result r = idmpc("swingup " + quote(kArm4) + " --R 1e-9 --duration 0.05 --fallback --summary b.json");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 2) << r.err;
   const nlohmann::json b = nlohmann::json::parse(slurp(dir_ / "b.json"));
   EXPECT_EQ(b["diverged"], false);
   EXPECT_EQ(b["task"]["weights"]["Qa"], nlohmann::json::array({1e-4}));
@@ -539,7 +556,7 @@ TEST_F(Cli, SwingupRefusesDurationsOfNoStepOrBeyondAnyUse) {
 TEST_F(Cli, SwingupWarnsAboutUnmodeledFeaturesRangesAndTheTimestep) {
   const Result r = idmpc("swingup " + quote(std::string(IDMPC_SOURCE_DIR) + "/mjcf/panda.xml") +
                          " --q0 0 0 0 0 0 5 0 --qref 0 0 0 -4 0 1 0 --dt 0.0015 --duration 0.003 --summary s.json");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 2) << r.err;
   const std::vector<std::string> expected = {
       "does not model: limit on joint 'joint1'", "q0 of joint 'joint4' of body 'link4' is 0, outside its range",
       "q0 of joint 'joint6' of body 'link6' is 5, outside its range", "qref of joint 'joint4' of body 'link4' is -4",
@@ -567,21 +584,21 @@ TEST_F(Cli, SwingupImplicitDampingLetsFdRunAHeavilyDampedArm) {
     "cgmres": {"Tf": 0.5, "alpha": 0, "init_full_horizon": true}})");
   // explicit: FD fails at t = 0, and the hint names the fix
   const Result exp = idmpc("swingup --task task.json --implicit-damping off --duration 0.05 --summary explicit.json");
-  ASSERT_EQ(exp.code, 0) << exp.err;
+  ASSERT_EQ(exp.code, 3) << exp.err;
   const nlohmann::json e = nlohmann::json::parse(slurp(dir_ / "explicit.json"));
   EXPECT_EQ(e["diverged"], true);
   EXPECT_EQ(e["diverged_at"], 0.0);
   EXPECT_EQ(e["divergence_hint"].get<std::string>().rfind("try --implicit-damping on", 0), 0u) << e["divergence_hint"];
   // the default, "auto", sees the unstable step and integrates the damping implicitly, and says so
   const Result aut = idmpc("swingup --task task.json --duration 0.05 --summary auto.json");
-  ASSERT_EQ(aut.code, 0) << aut.err;
+  ASSERT_EQ(aut.code, 2) << aut.err;
   EXPECT_NE(aut.err.find("joint damping integrated implicitly"), std::string::npos) << aut.err;
   const nlohmann::json a = nlohmann::json::parse(slurp(dir_ / "auto.json"));
   EXPECT_EQ(a["diverged"], false) << a["divergence_reason"];
   EXPECT_EQ(a["implicit_damping"], true);
   EXPECT_EQ(a["task"]["implicit_damping"], "auto");
   const Result imp = idmpc("swingup --task task.json --implicit-damping on --duration 0.05 --summary implicit.json");
-  ASSERT_EQ(imp.code, 0) << imp.err;
+  ASSERT_EQ(imp.code, 2) << imp.err;
   const nlohmann::json i = nlohmann::json::parse(slurp(dir_ / "implicit.json"));
   EXPECT_EQ(i["diverged"], false) << i["divergence_reason"];
   EXPECT_EQ(i["task"]["implicit_damping"], true);
@@ -593,7 +610,7 @@ TEST_F(Cli, SwingupImplicitDampingLetsFdRunAHeavilyDampedArm) {
 
 TEST_F(Cli, SwingupWarnsThatQaDoesNothingInFd) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --formulation fd --Qa 1 --duration 0.01 --summary s.json");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 2) << r.err;
   EXPECT_NE(r.err.find("--Qa (weights.Qa) has no effect with FD"), std::string::npos) << r.err;
   const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
   EXPECT_NE(s["warnings"].dump().find("no effect with FD"), std::string::npos);
@@ -707,7 +724,7 @@ TEST_F(Cli, SwingupRunsMultipleShootingAndRecordsIt) {
     for (const char* scheme : {"single", "multiple"}) {
       const Result r = idmpc("swingup " + quote(kArm4) + " --formulation " + f + " --shooting " + scheme +
                              " --duration 0.3 --log log.csv --summary s.json");
-      ASSERT_EQ(r.code, 0) << r.err;
+      ASSERT_EQ(r.code, 2) << r.err;
       const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
       EXPECT_EQ(s["task"]["cgmres"]["shooting"], scheme);
       EXPECT_EQ(s["diverged"], false);
@@ -875,7 +892,7 @@ INSTANTIATE_TEST_SUITE_P(Commands, CliSynopsis, ::testing::Values("check", "dyna
 
 TEST_F(Cli, NegativeNumbersParseInEveryForm) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --q0 .4 -.4 -1e-3 -.5 --qref -.25 0 0 0 --duration 0.002 --log log.csv");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 2) << r.err;
   const std::vector<std::string> lines = lines_of(slurp(dir_ / "log.csv"));
   ASSERT_GE(lines.size(), 2u);
   const std::vector<std::string> f = split(lines[1]);
@@ -1069,7 +1086,7 @@ TEST_F(CliDevice, SwingupWritesThroughDevicesFollowsLinksAndKeepsModes) {
   fs::permissions(dir_ / "real" / "log.csv", fs::perms::owner_read | fs::perms::owner_write);
   fs::create_symlink("real/log.csv", dir_ / "log.csv");
   const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.02 --log log.csv --summary null");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.code, 2) << r.err;
   EXPECT_TRUE(is_char_device(null)) << "the device was replaced by a regular file";
   EXPECT_TRUE(fs::is_symlink(dir_ / "log.csv")) << "the link was replaced by a regular file";
   EXPECT_EQ(slurp(dir_ / "real" / "log.csv").rfind("t,q0,", 0), 0u);
