@@ -13,7 +13,9 @@
 #include <string>
 #include <tuple>
 
+#include "idmpc/dynamics/dynamics.hpp"
 #include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/controller.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 #include "support/sanitizers.hpp"
@@ -112,6 +114,42 @@ TEST_P(NoMallocUpdate, UpdatesAfterTheFirstDoNotAllocate) {
     allocations = c.count();
   }
   EXPECT_EQ(allocations, 0);
+}
+
+// the controller's own work per update (eqs. 27–28, the disturbance observer handing d̂ to the
+// horizon) allocates nothing either, with the friction in the model
+TEST(NoMallocController, UpdatesWithTheObserverDoNotAllocate) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const Model model = with_joint_friction(p.model, VecX<double>::Constant(4, 0.5), VecX<double>::Constant(4, 0.1));
+  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    SCOPED_TRACE(to_string(f));
+    CgmresSettings s;
+    s.alpha = 0;  // a full horizon from the start, near the upright target
+    s.init_full_horizon = true;
+    Controller controller(OcpProblem(model, f, DerivativeMode::kAdjoint, paper_weights(4), VecX<double>::Zero(4), 25), s,
+                          &model);
+    controller.set_disturbance_observer(0.02);
+    // a plant: the same model with a constant torque the controller does not know, explicit Euler
+    Data plant(model);
+    const VecX<double> unknown = (VecX<double>(4) << 0.3, -0.2, 0.1, 0.05).finished();
+    VecX<double> q = (VecX<double>(4) << -0.1, 0.05, 0.07, -0.03).finished();
+    VecX<double> v = (VecX<double>(4) << 0.2, -0.1, 0.05, 0.03).finished();
+    VecX<double> tau = controller.initialize(q, v), force(4);
+    long allocations = 0;
+    for (int k = 0; k < 6; ++k) {
+      {
+        CountAllocations c;
+        ASSERT_TRUE(controller.update(k * s.dt, q, v)) << controller.failure();
+        if (k >= 2) allocations += c.count();  // the first updates may size workspaces
+      }
+      force = tau + unknown;
+      v += s.dt * aba(model, plant, q, v, force);
+      q += s.dt * v;
+      tau = controller.torque();
+    }
+    EXPECT_EQ(allocations, 0);
+    EXPECT_TRUE((controller.disturbance().array() != 0).any()) << "the observer must have run";
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -28,9 +28,13 @@ QuadraticCost::QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n)
   check(w_.R, n, "weight R", true);
 }
 
-void QuadraticCost::set_torque_reference(VecX<double> u_ref) {
-  check(u_ref, q_ref_.size(), "torque reference u_ref", false);
-  u_ref_ = std::move(u_ref);
+void QuadraticCost::set_torque_reference(const In& u_ref) {
+  if (u_ref.size() != q_ref_.size()) {
+    throw std::invalid_argument("torque reference u_ref has " + std::to_string(u_ref.size()) + " entries, expected " +
+                                std::to_string(q_ref_.size()) + " (one per joint)");
+  }
+  if (!u_ref.allFinite()) throw std::invalid_argument("torque reference u_ref is not finite");
+  u_ref_ = u_ref;
 }
 
 }  // namespace idmpc

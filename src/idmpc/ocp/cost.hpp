@@ -28,8 +28,8 @@ class QuadraticCost {
   const OcpWeights& weights() const { return w_; }
   const VecX<double>& q_ref() const { return q_ref_; }
   const VecX<double>& u_ref() const { return u_ref_; }
-  /// @brief Sets u_ref (size n, finite; else std::invalid_argument).
-  void set_torque_reference(VecX<double> u_ref);
+  /// @brief Sets u_ref (size n, finite; else std::invalid_argument), without allocating.
+  void set_torque_reference(const In& u_ref);
 
   /// @brief ∂φ/∂q and ∂φ/∂v.
   void terminal_gradient(In q, In v, Out phi_q, Out phi_v) const {

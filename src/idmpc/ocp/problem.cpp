@@ -42,7 +42,7 @@ OcpProblem::OcpProblem(const Model& model, Formulation formulation, DerivativeMo
     throw std::invalid_argument("the forward-dynamics problem needs R > 0 on every joint");
   }
   stage_.assign(static_cast<size_t>(N), Data(model));
-  for (Vec* x : {&w_, &gq_, &gv_, &lq_, &lv_, &la_, &d_hat_, &tau_in_}) *x = Vec::Zero(n);
+  for (Vec* x : {&w_, &gq_, &gv_, &lq_, &lv_, &la_, &d_hat_, &tau_in_, &u_ref_}) *x = Vec::Zero(n);
   for (VecX<StagePack>* x : {&ql_, &vl_, &al_, &wl_, &ul_}) *x = VecX<StagePack>::Zero(n);
   rl_ = VecX<StagePack>::Zero(bounds_.m());
   // u_ref = ID(q_ref, 0, 0) − d̂: the torque that holds the target (DESIGN §8, §10)
@@ -59,7 +59,8 @@ void OcpProblem::set_disturbance(const Vec& d_hat) {
                                 " finite values, got " + std::to_string(d_hat.size()));
   }
   d_hat_ = d_hat;
-  cost_.set_torque_reference(tau_ref_ - d_hat_);
+  u_ref_ = tau_ref_ - d_hat_;
+  cost_.set_torque_reference(u_ref_);
 }
 
 void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {

@@ -157,6 +157,7 @@ class OcpProblem {
   Vec d_hat_;                               ///< disturbance estimate (set_disturbance)
   Vec tau_ref_;                             ///< ID(q_ref, 0, 0)
   Vec tau_in_;                              ///< FD: the model's torque u + d̂ of a stage
+  Vec u_ref_;                               ///< ID(q_ref, 0, 0) − d̂, handed to the cost
   std::vector<Data> stage_;                 ///< one dynamics workspace per stage
   DataTpl<StagePack> lane_data_;            ///< workspace of the stages in lanes
   VecX<StagePack> ql_, vl_, al_, wl_, rl_;  ///< stage inputs (rl_: multipliers) packed in lanes
