@@ -63,11 +63,14 @@ Bounds bounds_of(const TorqueLimits& limits, const VecX<double>& R, const VecX<d
 // J(U) of DESIGN §4 and §8: FD rolls out a_i = FD(q_i, v_i, u_i), ID computes
 // u_i = ID(q_i, v_i, a_i); the torque cost is ½(u − u_ref)ᵀR(u − u_ref). With torque limits each
 // stage block of U is (input, d, ρ) and the stage adds the Lagrangian's ρᵀ(s∘c) − r_dᵀd, with
-// c_k = (u_j − ū_k)² + d_k² − (Δ_k/2)² for the bounded joints j = joint[k].
+// c_k = (u_j − ū_k)² + d_k² − (Δ_k/2)² for the bounded joints j = joint[k]. With a disturbance
+// estimate d̂ (DESIGN §10; empty: none) the model's joint torque is u + d̂: FD rolls out
+// a_i = FD(q_i, v_i, u_i + d̂), ID computes u_i = ID(q_i, v_i, a_i) − d̂ (u_ref is the caller's).
 double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, const VecX<double>& q_ref,
             const VecX<double>& u_ref, const Bounds& bounds, const VecX<double>& U, VecX<double> q,
-            VecX<double> v, double T, int N) {
+            VecX<double> v, double T, int N, const VecX<double>& d_hat = VecX<double>()) {
   const int n = model.n, m = bounds.m(), sd = n + 2 * m;
+  const VecX<double> dist = d_hat.size() == 0 ? VecX<double>::Zero(n) : d_hat;
   const double dtau = T / N;
   auto phi = [&](const VecX<double>& qi, const VecX<double>& vi) {
     const VecX<double> e = qi - q_ref;
@@ -78,10 +81,10 @@ double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, 
     VecX<double> a(n), u(n);
     if (f == Formulation::kForwardDynamics) {
       u = U.segment(i * sd, n);
-      a = aba(model, data, q, v, u);
+      a = aba(model, data, q, v, VecX<double>(u + dist));
     } else {
       a = U.segment(i * sd, n);
-      u = rnea(model, data, q, v, a);
+      u = rnea(model, data, q, v, a) - dist;
     }
     const VecX<double> e = u - u_ref;
     double L = phi(q, v) + 0.5 * e.dot(w.R.cwiseProduct(e));
@@ -106,14 +109,16 @@ VecX<double> holding_torque(const Model& model, Data& data, const VecX<double>& 
   return rnea(model, data, q_ref, zero, zero);
 }
 
-// the stage torques u_i = ID(q_i, v_i, a_i) along the explicit-Euler rollout of accelerations A
+// the stage torques u_i = ID(q_i, v_i, a_i) − d̂ along the explicit-Euler rollout of
+// accelerations A (d̂ empty: none)
 VecX<double> torques_of(const Model& model, Data& data, const VecX<double>& A, VecX<double> q,
-                        VecX<double> v, double T, int N) {
+                        VecX<double> v, double T, int N, const VecX<double>& d_hat = VecX<double>()) {
   const int n = model.n;
   const double dtau = T / N;
   VecX<double> U(N * n);
   for (int i = 0; i < N; ++i) {
     U.segment(i * n, n) = rnea(model, data, q, v, A.segment(i * n, n));
+    if (d_hat.size() != 0) U.segment(i * n, n) -= d_hat;
     const VecX<double> q_next = q + dtau * v;
     v += dtau * A.segment(i * n, n);
     q = q_next;
@@ -271,6 +276,160 @@ TEST_P(OcpGradient, WithTorqueLimitsResidualIsTheGradientOfTheAugmentedCost) {
   }
 }
 
+// Joint friction f·tanh(v/ε) and a disturbance estimate d̂ (DESIGN §10): the model's joint torque
+// is u + d̂, so the cost rolled out here uses a = FD(q, v, u + d̂) (FD) and u = ID(q, v, a) − d̂
+// (ID), with u_ref = ID(q_ref, 0, 0) − d̂ and the torque limits on u; the model has friction
+// on most joints (random f in [0.1, 2], ε in [0.01, 0.5], every third joint none). Half the
+// joints move slowly, |v| ≲ 2ε over the whole horizon, where the friction's slope f/ε·sech²(v/ε)
+// dominates ∂ID/∂v; the others fast, where tanh saturates and only the force ±f is seen.
+// For every formulation and derivative mode, with and without torque limits, stages in SIMD
+// lanes and stage by stage: F is (1/Δτ) ∂J/∂U, single shooting's and multiple shooting's at the
+// rollout (there FD adjoint runs its stages in lanes at the stored costates), and the stage
+// torques of the rollout are u = ID − d̂.
+//
+// FD's rollout integrates the friction explicitly: near v = 0 its slope acts as a damping f/ε, and
+// with Δτ·(f/ε)·(M⁻¹)_jj ≫ 1 the Euler step amplifies velocity perturbations by that factor per
+// stage (measured: F ~ 1e12 on tree.xml, whose light bodies have (M⁻¹)_jj ~ 1e2–1e3, and J(U) so
+// nonlinear that no central difference resolves it). The horizon setup (horizon_setup.cpp) keeps
+// ε ≥ Δτ·f·(M⁻¹)_jj for that reason; where FD is involved, the test's ε obeys the same floor at q0.
+struct FrictionDraw {
+  VecX<double> f, eps;
+};
+
+FrictionDraw draw_friction(std::mt19937& rng, int n) {
+  FrictionDraw d{random_vector(rng, n, 0.1, 2.0), random_vector(rng, n, std::log(0.01), std::log(0.5))};
+  d.eps = d.eps.array().exp();  // log-uniform
+  for (int j = 1; j < n; j += 3) {
+    d.f[j] = 0;
+    d.eps[j] = 0;
+  }
+  return d;
+}
+
+// ε_j ≥ Δτ·f_j·(M(q)⁻¹)_jj: the explicit horizon step stable at q (as horizon_setup.cpp chooses it)
+void stable_friction_velocity(const Model& model, const VecX<double>& q, double dtau, FrictionDraw& d) {
+  Data data(model);
+  const VecX<double> minv_diag = minv_matrix(model, data, q).diagonal();
+  for (int j = 0; j < model.n; ++j) {
+    if (d.f[j] > 0) d.eps[j] = std::max(d.eps[j], dtau * d.f[j] * minv_diag[j]);
+  }
+}
+
+// joint j slow (j even: |v| ≤ 2ε over the horizon, ε capped at 0.5 where the floor above raised
+// it) or fast (|v| up to 1 + 3T); initial velocities and accelerations of the horizon
+void friction_test_motion(std::mt19937& rng, const VecX<double>& eps, int N, double T, VecX<double>& v0,
+                          VecX<double>& A) {
+  const int n = static_cast<int>(eps.size());
+  v0 = random_vector(rng, n, -1.0, 1.0);
+  A = random_vector(rng, N * n, -3.0, 3.0);
+  for (int j = 0; j < n; j += 2) {
+    const double e = eps[j] > 0 ? std::min(eps[j], 0.5) : 0.1;
+    v0[j] *= e;
+    for (int i = 0; i < N; ++i) A[i * n + j] *= e / (3.0 * T);  // Σ Δτ|a| ≤ ε
+  }
+}
+
+TEST_P(OcpGradient, WithFrictionAndDisturbanceResidualIsTheGradientOfTheCost) {
+  const auto& [path, formulation_binding, mode] = GetParam();
+  const Formulation formulation = formulation_binding;  // a variable the lambdas may capture (C++17)
+  const Problem p = load_problem(path);
+  const int n = p.model.n, N = 6;
+  const double T = 0.3;
+  for (unsigned seed = 1; seed <= 2; ++seed) {
+    std::mt19937 rng(100 + seed);
+    FrictionDraw fr = draw_friction(rng, n);
+    const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2),
+                       random_vector(rng, n, 1e-3, 1e-2), random_vector(rng, n, 1e-4, 1e-3)};
+    const VecX<double> q_ref = random_vector(rng, n, -0.5, 0.5), q0 = random_vector(rng, n, -2.0, 2.0);
+    if (formulation == Formulation::kForwardDynamics) stable_friction_velocity(p.model, q0, T / N, fr);
+    const Model model = with_joint_friction(p.model, fr.f, fr.eps);
+    Data data(model);
+    VecX<double> v0, A;
+    friction_test_motion(rng, fr.eps, N, T, v0, A);
+    // of the order of the holding torques, and of both signs
+    const VecX<double> d_hat = random_vector(rng, n, -3.0, 3.0);
+    const VecX<double> Utorque = torques_of(model, data, A, q0, v0, T, N, d_hat);
+    const VecX<double> u_ref = holding_torque(model, data, q_ref) - d_hat;
+    for (const bool limited : {false, true}) {
+      const TorqueLimits limits = limited ? limits_around(Utorque, n, N) : TorqueLimits{};
+      for (const bool lanes : {true, false}) {
+        SCOPED_TRACE("seed " + std::to_string(seed) + (limited ? ", torque limits" : ", no limits") +
+                     (lanes ? ", lanes" : ", stage by stage"));
+        Shooting ocp(model, formulation, mode, w, q_ref, N, limits);
+        ocp.set_stage_batching(lanes);
+        ocp.problem().set_disturbance(d_hat);
+        ASSERT_EQ(ocp.problem().disturbance(), d_hat);
+        EXPECT_LE((ocp.problem().cost().u_ref() - u_ref).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, u_ref.norm()))
+            << "u_ref = ID(q_ref, 0, 0) - d_hat";
+        const int m = ocp.problem().m(), sd = ocp.stage_dim();
+        ASSERT_EQ(m, limited ? n / 2 : 0);
+        const Bounds b = limited ? bounds_of(limits, w.R, ocp.problem().torque_bounds().r_d()) : Bounds{};
+        VecX<double> U(N * sd);
+        for (int i = 0; i < N; ++i) {
+          const VecX<double>& input = formulation == Formulation::kInverseDynamics ? A : Utorque;
+          U.segment(i * sd, n) = input.segment(i * n, n);
+          if (m > 0) {
+            U.segment(i * sd + n, m) = random_vector(rng, m, 1e-3, 1.0).cwiseProduct(b.half_range);
+            U.segment(i * sd + n + m, m) = random_vector(rng, m, -1.0, 10.0);
+          }
+        }
+        VecX<double> F(N * sd);
+        ocp.residual(U, q0, v0, T, F);
+        // the stage torques of the rollout: the actuators' u = ID − d̂ (ID: unpacked from the lanes)
+        EXPECT_LE((Eigen::Map<const VecX<double>>(ocp.torques().data(), N * n) - Utorque).cwiseAbs().maxCoeff(),
+                  1e-10 * std::max(1.0, Utorque.cwiseAbs().maxCoeff()))
+            << "stage torques";
+
+        // as in the torque-limit test: d and ρ differentiated with σ-times larger steps
+        VecX<double> sigma = VecX<double>::Ones(N * sd);
+        for (int i = 0; i < N; ++i) sigma.segment(i * sd + n, 2 * m).setConstant(kExactStepScale);
+        const MatX<double> grad = central_difference_jacobian(
+            [&](const VecX<double>& X) {
+              const VecX<double> Y = X.cwiseProduct(sigma);
+              return VecX<double>::Constant(1, cost(model, data, formulation, w, q_ref, u_ref, b, Y, q0, v0, T, N, d_hat));
+            },
+            VecX<double>(U.cwiseQuotient(sigma)));
+        const VecX<double> expected = grad.row(0).transpose().cwiseQuotient(sigma) / (T / N);
+        EXPECT_LE(part_error(F, expected, N, sd, 0, n), kGradientMatch)
+            << "inputs\nF        " << F.transpose() << "\nexpected " << expected.transpose();
+        if (m > 0) {
+          EXPECT_LE(part_error(F, expected, N, sd, n, m), kGradientMatch) << "dummy inputs";
+          EXPECT_LE(part_error(F, expected, N, sd, n + m, m), kGradientMatch) << "multipliers";
+        }
+
+        // multiple shooting at the rollout: zero defects and the same gradient
+        const ShootingTrajectory rollout = ocp.trajectory();
+        ShootingDefects e;
+        e.resize(n, N);
+        VecX<double> Fm(N * sd);
+        ocp.residual_at(U, rollout, q0, v0, T, Fm, e);
+        EXPECT_LE(part_error(Fm, expected, N, sd, 0, n), kGradientMatch) << "inputs, multiple shooting";
+        if (m > 0) {
+          EXPECT_LE(part_error(Fm, expected, N, sd, n + m, m), kGradientMatch) << "multipliers, multiple shooting";
+        }
+        EXPECT_LE(std::sqrt(e.v.squaredNorm()), 1e-10 * std::max(1.0, rollout.v.norm())) << "velocity defects";
+      }
+    }
+  }
+}
+
+// set_disturbance takes n finite values
+TEST(OcpDisturbance, RefusesWrongSizeAndNonFiniteValues) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const int n = p.model.n;
+  OcpProblem ocp(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n),
+                 VecX<double>::Zero(n), 5);
+  EXPECT_EQ(ocp.disturbance(), VecX<double>::Zero(n)) << "zero until set";
+  EXPECT_THROW(ocp.set_disturbance(VecX<double>::Zero(n + 1)), std::invalid_argument);
+  EXPECT_THROW(ocp.set_disturbance(VecX<double>::Zero(n - 1)), std::invalid_argument);
+  VecX<double> bad = VecX<double>::Zero(n);
+  bad[1] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(ocp.set_disturbance(bad), std::invalid_argument);
+  bad[1] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(ocp.set_disturbance(bad), std::invalid_argument);
+  EXPECT_EQ(ocp.disturbance(), VecX<double>::Zero(n)) << "a refused value must not be kept";
+}
+
 // u_ref = ID(q_ref, 0, 0) removes the gravity (and spring) offset: at rest at the target, the
 // trajectory that stays there — a = 0 in ID, u = u_ref in FD — is stationary, F = 0, although
 // the holding torque is far from zero.
@@ -352,6 +511,70 @@ TEST(OcpFormulations, IdResidualIsFdResidualThroughTheChainRuleWhenQaIsZero) {
         const VecX<double> last = crba(p.model, data, q) * Ffd.tail(n);
         EXPECT_LE((Fid.tail(n) - last).cwiseAbs().maxCoeff() / std::max(1.0, last.cwiseAbs().maxCoeff()),
                   kLastStage);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace idmpc
+
+namespace idmpc {
+namespace {
+
+// The same chain rule with joint friction in the model and a disturbance estimate d̂ in both
+// problems: U(A) is now u_i = ID(q_i, v_i, a_i) − d̂ with friction in ID, FD rolls out
+// FD(q, v, u + d̂); F_ID = (∂U/∂A)ᵀ F_FD still holds (d̂ shifts U but not ∂U/∂A, and the two
+// problems must shift u_ref alike), F_ID,N−1 = M(q_{N−1}) F_FD,N−1 on the last stage. Stages in
+// lanes and stage by stage, both derivative modes. Half the joints slow (|v| ≲ 2ε), where the
+// friction's slope enters ∂U/∂A through the later stages' velocities.
+TEST(OcpFormulations, IdResidualIsFdResidualThroughTheChainRuleWithFrictionAndDisturbance) {
+  for (const std::string path : {IDMPC_SOURCE_DIR "/mjcf/arm4.xml", IDMPC_SOURCE_DIR "/mjcf/tree.xml"}) {
+    const Problem p = load_problem(path);
+    const int n = p.model.n, N = 6;
+    const double T = 0.3;
+    for (unsigned seed = 1; seed <= 2; ++seed) {
+      std::mt19937 rng(200 + seed);
+      FrictionDraw fr = draw_friction(rng, n);
+      const OcpWeights w{VecX<double>::Constant(n, 1.0), VecX<double>::Constant(n, 0.1), VecX<double>::Zero(n),
+                         VecX<double>::Constant(n, 1e-4)};
+      const VecX<double> q_ref = random_vector(rng, n, -0.5, 0.5), q0 = random_vector(rng, n, -2.0, 2.0);
+      stable_friction_velocity(p.model, q0, T / N, fr);  // FD's rollout is part of the identity
+      const Model model = with_joint_friction(p.model, fr.f, fr.eps);
+      Data data(model);
+      VecX<double> v0, A;
+      friction_test_motion(rng, fr.eps, N, T, v0, A);
+      const VecX<double> d_hat = random_vector(rng, n, -3.0, 3.0);
+      const VecX<double> U = torques_of(model, data, A, q0, v0, T, N, d_hat);
+      const MatX<double> dU_dA = central_difference_jacobian(
+          [&](const VecX<double>& X) { return torques_of(model, data, X, q0, v0, T, N, d_hat); }, A);
+      VecX<double> q = q0, v = v0;
+      for (int i = 0; i < N - 1; ++i) {
+        const VecX<double> q_next = q + (T / N) * v;
+        v += (T / N) * A.segment(i * n, n);
+        q = q_next;
+      }
+      const MatX<double> M_last = crba(model, data, q);
+      for (DerivativeMode mode : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
+        for (const bool lanes : {true, false}) {
+          SCOPED_TRACE(path + ", " + to_string(mode) + ", seed " + std::to_string(seed) +
+                       (lanes ? ", lanes" : ", stage by stage"));
+          Shooting fd(model, Formulation::kForwardDynamics, mode, w, q_ref, N);
+          Shooting id(model, Formulation::kInverseDynamics, mode, w, q_ref, N);
+          for (Shooting* s : {&fd, &id}) {
+            s->set_stage_batching(lanes);
+            s->problem().set_disturbance(d_hat);
+          }
+          VecX<double> Ffd(N * n), Fid(N * n);
+          fd.residual(U, q0, v0, T, Ffd);
+          id.residual(A, q0, v0, T, Fid);
+          const VecX<double> expected = dU_dA.transpose() * Ffd;
+          EXPECT_LE((Fid - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kChainRule)
+              << "F_ID     " << Fid.transpose() << "\nexpected " << expected.transpose();
+          const VecX<double> last = M_last * Ffd.tail(n);
+          EXPECT_LE((Fid.tail(n) - last).cwiseAbs().maxCoeff() / std::max(1.0, last.cwiseAbs().maxCoeff()),
+                    kLastStage);
+        }
       }
     }
   }
