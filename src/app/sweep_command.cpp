@@ -20,6 +20,8 @@
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
 #include "app/swingup.hpp"
+#include "idmpc/mujoco/import.hpp"
+#include "idmpc/mujoco/load.hpp"
 
 namespace idmpc::app {
 namespace {
@@ -27,7 +29,9 @@ namespace {
 struct SweepOptions {
   std::string out_dir = "results/sweep";
   std::string models_dir = IDMPC_SOURCE_DIR "/mjcf";
-  std::string tables = "all";        // 12, 3 or all
+  std::string tables = "all";        // 12, 3, all or arms
+  std::string arms_tasks;            // arms: the list of tasks; empty: arms.json of models_dir
+  std::string offset_free = "task";  // arms: task (each task's own setting), on, off or both
   std::string derivatives = "matrix";  // matrix, adjoint or both
   std::string shooting = "single";     // single, multiple or both
   double duration = 10.0;
@@ -44,18 +48,18 @@ std::string stages_note(const SweepOptions& opt) {
                            "paper's arithmetic.";
 }
 
-// the real-arm grid: the reach task of every arm in mjcf/arms.json, both formulations
+// the real-arm grid: each task of a list (mjcf/arms.json unless --arms-tasks), both formulations
 constexpr const char* kArmsTable = "arms";
-// a reach succeeds when it does not diverge and ends within this of its target (issue 9)
-constexpr double kReachTolerance = 1e-3;
 
 struct Cell {
-  std::string table, model, formulation, derivatives, shooting;  // arms: model is the task file's name
+  // arms: model is the task file as the list names it
+  std::string table, model, formulation, derivatives, shooting;
   int n = 0, N = 0, kmax = 0;
-  std::string settings;  // hash of everything else the cell runs with (the task as run)
+  std::string settings;      // hash of everything else the cell runs with (the task as run)
+  bool offset_free = false;  // offset-free tracking (the disturbance observer) on
   std::string key() const {
-    return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" + std::to_string(N) +
-           "|" + std::to_string(kmax) + "|" + settings;
+    return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
+           (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" + settings;
   }
   // the solver variant, as the tables label it
   std::string variant() const { return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting"); }
@@ -75,7 +79,12 @@ struct CellResult {
   double diverged_at = NAN, mean_ms = NAN, p95_ms = NAN, final_q_error = NAN, final_v_norm = NAN;
   long steps = 0, saturated_steps = 0;   // steps run; steps with a clamped torque
   double max_violation = NAN;            // of the OCP's torques over their bounds [N m]
-  bool reached() const { return !diverged && final_q_error < kReachTolerance; }
+  // the target reached: not diverged, final max|q − q_ref| below the task's reach_tolerance
+  bool reached = false;
+  double reach_tolerance = NAN;
+  long contact_steps = 0;                // control steps with a contact in the plant
+  double max_contact_force = NAN;        // the largest contact normal force [N]
+  double final_disturbance = NAN;        // max|d̂| of the observer at the end [N m] (0 when off)
 };
 
 // the paper's figure for a cell (mjcf/paper_tables.json)
@@ -88,18 +97,28 @@ PaperFigure paper_figure(const PaperTables& tables, const Cell& c) {
   return p ? PaperFigure{p->ms, p->mark} : PaperFigure{NAN, ""};
 }
 
-// the paper's cells, in the file's order, for the chosen tables and derivative modes
 // a file of the models directory (an absolute name stays as it is)
 std::string in_models(const SweepOptions& opt, const std::string& file) {
   return (std::filesystem::path(opt.models_dir) / file).string();
 }
 
+// the list of tasks of the arms table: --arms-tasks, or arms.json of the models directory
+std::string arms_list(const SweepOptions& opt) {
+  return opt.arms_tasks.empty() ? in_models(opt, "arms.json") : opt.arms_tasks;
+}
+
+// the file a cell runs: the paper's model, or an arm's task file (relative to its list's directory)
+std::string cell_file(const SweepOptions& opt, const Cell& c) {
+  if (c.table != kArmsTable) return in_models(opt, c.model);
+  return (std::filesystem::path(arms_list(opt)).parent_path() / c.model).string();
+}
+
 // the task a cell runs: the paper's on the cell's model, or an arm's own task file
 Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   const bool arm = c.table == kArmsTable;
-  Task task = arm ? load_task(in_models(opt, c.model)) : base;
+  Task task = arm ? load_task(cell_file(opt, c)) : base;
   if (!arm) {
-    task.model = in_models(opt, c.model);
+    task.model = cell_file(opt, c);
     task.Qa = {0.0};  // the paper's rule: Q_a = 0 first, the fallback only after a divergence
   }
   task.formulation = c.formulation;
@@ -107,33 +126,79 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   task.shooting = c.shooting;
   task.N = c.N;
   task.kmax = c.kmax;
+  task.offset_free = c.offset_free;
   if (!arm || opt.duration_given) task.duration = opt.duration;
   if (!opt.simd_stages) task.simd_stages = false;
   return task;
 }
 
-// the real arms' reach tasks (mjcf/arms.json), paths relative to the models directory
+// the task files of the arms table's list ({"tasks": [files relative to the list]}), each once
 std::vector<std::string> arm_tasks(const SweepOptions& opt) {
-  const std::string path = opt.models_dir + "/arms.json";
+  const std::string path = arms_list(opt);
+  const std::string what = opt.arms_tasks.empty() ? " (the list of real-arm tasks; see --models and --arms-tasks)"
+                                                  : " (--arms-tasks)";
   std::ifstream in(path);
-  if (!in) throw std::invalid_argument("'" + path + "' cannot be read (the list of real-arm tasks; see --models)");
+  if (!in || std::filesystem::is_directory(path)) throw std::invalid_argument("'" + path + "' cannot be read" + what);
+  std::vector<std::string> tasks;
   try {
-    return nlohmann::json::parse(in).at("tasks").get<std::vector<std::string>>();
+    tasks = nlohmann::json::parse(in).at("tasks").get<std::vector<std::string>>();
   } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument("'" + path + "': expected {\"tasks\": [task files]}, " + e.what());
+    throw std::invalid_argument("'" + path + "': expected {\"tasks\": [task files]}" + what + ", " + e.what());
+  }
+  if (tasks.empty()) throw std::invalid_argument("'" + path + "' lists no task" + what);
+  for (size_t k = 0; k < tasks.size(); ++k) {
+    if (tasks[k].empty() || tasks[k].find_first_of(",\r\n") != std::string::npos) {
+      throw std::invalid_argument("'" + path + "' lists the task file name '" + tasks[k] +
+                                  "', empty or with a comma or line break (it names a CSV row)" + what);
+    }
+    if (std::find(tasks.begin(), tasks.begin() + k, tasks[k]) != tasks.begin() + k) {
+      throw std::invalid_argument("'" + path + "' lists '" + tasks[k] + "' twice" + what);
+    }
+  }
+  return tasks;
+}
+
+// a listed task that cannot run is refused before any cell runs: the task file reads, its model
+// loads, and its settings fit the model (q0, q_ref, limits and weights per joint)
+Task checked_arm_task(const SweepOptions& opt, const std::string& file) {
+  const std::string path = cell_file(opt, Cell{kArmsTable, file, "", "", "", 0, 0, 0, "", false});
+  try {
+    Task task = load_task(path);
+    const mj::LoadedModel loaded = mj::load_model_translated(task.model);
+    mj::ImportOptions options;
+    options.direct_torque = task.direct_torque;
+    options.actuate_every_joint = task.actuate_every_joint;
+    options.joint_force_lower = loaded.joint_force_lower;
+    options.joint_force_upper = loaded.joint_force_upper;
+    const mj::ImportedModel imported = mj::import_model(loaded.model.get(), task.model, options);
+    const ResolvedTask r = resolve(task, imported.model.n);
+    if (r.q0.size() == 0) mj::keyframe_qpos(loaded.model.get(), task.q0_rule, task.model);
+    return task;
+  } catch (const std::exception& e) {
+    throw std::invalid_argument("'" + arms_list(opt) + "' lists '" + file + "', which cannot run: " + e.what());
   }
 }
 
-std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables);
+// the values of the offset-free axis for a task: --offset-free, or the task's own setting
+std::vector<bool> offset_free_axis(const SweepOptions& opt, const Task& task) {
+  if (opt.offset_free == "both") return {true, false};
+  if (opt.offset_free == "on") return {true};
+  if (opt.offset_free == "off") return {false};
+  return {task.offset_free};
+}
+
+std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, const Task& base);
 
 // the grid, each cell keyed by the settings it runs with
 std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables, const Task& base) {
-  std::vector<Cell> cells = grid_of(opt, tables);
+  std::vector<Cell> cells = grid_of(opt, tables, base);
   for (Cell& c : cells) c.settings = settings_hash(cell_task(base, c, opt), c.model);
   return cells;
 }
 
-std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables) {
+// the cells of the chosen tables (the paper's in the file's order) for the chosen derivative
+// modes and shooting schemes
+std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, const Task& base) {
   std::vector<std::string> modes, shootings;
   if (opt.derivatives == "both") {
     modes = {"matrix", "adjoint"};
@@ -150,13 +215,27 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables) {
   if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && opt.tables != kArmsTable) {
     throw std::invalid_argument("--tables must be 12, 3, all or arms, got '" + opt.tables + "'");
   }
+  if (opt.offset_free != "task" && opt.offset_free != "on" && opt.offset_free != "off" && opt.offset_free != "both") {
+    throw std::invalid_argument("--offset-free must be task, on, off or both, got '" + opt.offset_free + "'");
+  }
+  if (opt.tables != kArmsTable && opt.offset_free != "task") {
+    throw std::invalid_argument("--offset-free is an axis of --tables arms only, got --tables " + opt.tables);
+  }
+  if (opt.tables != kArmsTable && !opt.arms_tasks.empty()) {
+    throw std::invalid_argument("--arms-tasks lists the tasks of --tables arms, got --tables " + opt.tables);
+  }
   std::vector<Cell> cells;
   if (opt.tables == kArmsTable) {
+    std::vector<std::pair<std::string, Task>> tasks;
+    for (const std::string& file : arm_tasks(opt)) tasks.emplace_back(file, checked_arm_task(opt, file));
     for (const auto& mode : modes) {
       for (const auto& shooting : shootings) {
-        for (const std::string& file : arm_tasks(opt)) {
-          const Task t = load_task(in_models(opt, file));
-          for (const char* f : {"fd", "id"}) cells.push_back({kArmsTable, file, f, mode, shooting, 0, t.N, t.kmax, ""});
+        for (const auto& [file, t] : tasks) {
+          for (const bool offset_free : offset_free_axis(opt, t)) {
+            for (const char* f : {"fd", "id"}) {
+              cells.push_back({kArmsTable, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free});
+            }
+          }
         }
       }
     }
@@ -166,27 +245,71 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables) {
     for (const auto& shooting : shootings) {
       for (const PaperCell& p : tables.cells) {
         if (opt.tables != "all" && p.table != opt.tables) continue;
-        cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, ""});
+        cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free});
       }
     }
   }
   return cells;
 }
 
-const char* kCsvHeader =
-    "table,model,n,formulation,derivatives,shooting,N,kmax,Qa,diverged,diverged_at,mean_update_ms,"
-    "p95_update_ms,final_q_error,final_v_norm,paper_ms,paper_note,steps,saturated_steps,"
-    "max_constraint_violation,settings";
+// the columns of sweep.csv and arms.csv
+const std::vector<std::string> kCsvColumns = {
+    "table", "model", "n", "formulation", "derivatives", "shooting", "offset_free", "N", "kmax", "Qa", "diverged",
+    "diverged_at", "mean_update_ms", "p95_update_ms", "final_q_error", "reach_tolerance", "reached",
+    "final_v_norm", "paper_ms", "paper_note", "steps", "saturated_steps", "max_constraint_violation",
+    "contact_steps", "max_contact_force", "max_final_disturbance", "settings"};
+
+std::string csv_header() {
+  std::string h;
+  for (const std::string& c : kCsvColumns) h += (h.empty() ? "" : ",") + c;
+  return h;
+}
+
+// the index of a column of kCsvColumns
+size_t column(const char* name) {
+  const auto it = std::find(kCsvColumns.begin(), kCsvColumns.end(), name);
+  if (it == kCsvColumns.end()) throw std::logic_error(std::string("no sweep column ") + name);
+  return static_cast<size_t>(it - kCsvColumns.begin());
+}
 
 std::string csv_row(const PaperTables& tables, const CellResult& r) {
   const PaperFigure p = paper_figure(tables, r.cell);
-  std::ostringstream o;
-  o << std::setprecision(8) << r.cell.table << ',' << r.cell.model << ',' << r.cell.n << ','
-    << r.cell.formulation << ',' << r.cell.derivatives << ',' << r.cell.shooting << ',' << r.cell.N << ',' << r.cell.kmax << ','
-    << r.Qa << ',' << (r.diverged ? 1 : 0) << ',' << r.diverged_at << ',' << r.mean_ms << ','
-    << r.p95_ms << ',' << r.final_q_error << ',' << r.final_v_norm << ',' << p.ms << ',' << p.note << ','
-    << r.steps << ',' << r.saturated_steps << ',' << r.max_violation << ',' << r.cell.settings;
-  return o.str();
+  std::vector<std::string> f(kCsvColumns.size());
+  auto set = [&](const char* name, const auto& value) {
+    std::ostringstream o;
+    o << std::setprecision(8) << value;
+    f[column(name)] = o.str();
+  };
+  set("table", r.cell.table);
+  set("model", r.cell.model);
+  set("n", r.cell.n);
+  set("formulation", r.cell.formulation);
+  set("derivatives", r.cell.derivatives);
+  set("shooting", r.cell.shooting);
+  set("offset_free", r.cell.offset_free ? 1 : 0);
+  set("N", r.cell.N);
+  set("kmax", r.cell.kmax);
+  set("Qa", r.Qa);
+  set("diverged", r.diverged ? 1 : 0);
+  set("diverged_at", r.diverged_at);
+  set("mean_update_ms", r.mean_ms);
+  set("p95_update_ms", r.p95_ms);
+  set("final_q_error", r.final_q_error);
+  set("reach_tolerance", r.reach_tolerance);
+  set("reached", r.reached ? 1 : 0);
+  set("final_v_norm", r.final_v_norm);
+  set("paper_ms", p.ms);
+  set("paper_note", p.note);
+  set("steps", r.steps);
+  set("saturated_steps", r.saturated_steps);
+  set("max_constraint_violation", r.max_violation);
+  set("contact_steps", r.contact_steps);
+  set("max_contact_force", r.max_contact_force);
+  set("max_final_disturbance", r.final_disturbance);
+  set("settings", r.cell.settings);
+  std::string row;
+  for (const std::string& x : f) row += (row.empty() ? "" : ",") + x;
+  return row;
 }
 
 // finished cells of an earlier, possibly interrupted, sweep of this grid (CRLF line ends
@@ -204,7 +327,12 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
   if (!next()) return done;
   const std::string refuse = "'" + path + "' holds ";
   const std::string what = "; use another --out or move it away";
-  if (line != kCsvHeader) throw std::invalid_argument(refuse + "something other than this idmpc's sweep results" + what);
+  if (line != csv_header()) {
+    if (line.rfind("table,model,n,formulation,", 0) == 0) {
+      throw std::invalid_argument(refuse + "sweep results in the columns of another idmpc version" + what);
+    }
+    throw std::invalid_argument(refuse + "something other than this idmpc's sweep results" + what);
+  }
   std::set<std::string> keys;
   for (const Cell& c : cells) keys.insert(c.key());
   while (next()) {
@@ -212,24 +340,35 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
     std::stringstream ss(line);
     std::string x;
     while (std::getline(ss, x, ',')) f.push_back(x);
-    if (f.size() != 21) continue;
+    if (f.size() != kCsvColumns.size()) continue;
+    auto at = [&](const char* name) -> const std::string& { return f[column(name)]; };
     try {
       CellResult r;
-      r.cell = {f[0], f[1], f[3], f[4], f[5], std::stoi(f[2]), std::stoi(f[6]), std::stoi(f[7]), f[20]};
-      r.Qa = std::stod(f[8]);
-      r.diverged = f[9] == "1";
-      r.diverged_at = std::stod(f[10]);
-      r.mean_ms = std::stod(f[11]);
-      r.p95_ms = std::stod(f[12]);
-      r.final_q_error = std::stod(f[13]);
-      r.final_v_norm = std::stod(f[14]);
-      r.steps = std::stol(f[17]);
-      r.saturated_steps = std::stol(f[18]);
-      r.max_violation = std::stod(f[19]);
+      r.cell = {at("table"), at("model"), at("formulation"), at("derivatives"), at("shooting"), std::stoi(at("n")),
+                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1"};
+      r.Qa = std::stod(at("Qa"));
+      r.diverged = at("diverged") == "1";
+      r.diverged_at = std::stod(at("diverged_at"));
+      r.mean_ms = std::stod(at("mean_update_ms"));
+      r.p95_ms = std::stod(at("p95_update_ms"));
+      r.final_q_error = std::stod(at("final_q_error"));
+      r.reach_tolerance = std::stod(at("reach_tolerance"));
+      r.reached = at("reached") == "1";
+      r.final_v_norm = std::stod(at("final_v_norm"));
+      r.steps = std::stol(at("steps"));
+      r.saturated_steps = std::stol(at("saturated_steps"));
+      r.max_violation = std::stod(at("max_constraint_violation"));
+      r.contact_steps = std::stol(at("contact_steps"));
+      r.max_contact_force = std::stod(at("max_contact_force"));
+      r.final_disturbance = std::stod(at("max_final_disturbance"));
       if (!keys.count(r.cell.key())) {
         throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
-                                    r.cell.formulation + " " + r.cell.variant() + ": other duration, weights or "
-                                    "task)" + what);
+                                    r.cell.formulation + " " + r.cell.variant() +
+                                    (r.cell.table == kArmsTable
+                                         ? std::string(r.cell.offset_free ? ", offset-free on" : ", offset-free off") +
+                                               ": other duration, weights, task or --offset-free)"
+                                         : std::string(": other duration, weights or task)")) +
+                                    what);
       }
       done[r.cell.key()] = r;
     } catch (const std::logic_error& e) {
@@ -290,63 +429,91 @@ std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cell
     return it == done.end() ? nullptr : &it->second;
   };
   const std::vector<std::string> modes = variants(cells);
-  std::vector<std::string> tasks;
+  // the rows: each task with each offset-free setting it runs with, in the grid's order
+  using Row = std::pair<std::string, bool>;
+  std::vector<Row> rows;
+  std::set<double> tolerances;  // of the finished cells
   for (const Cell& c : cells) {
-    if (std::find(tasks.begin(), tasks.end(), c.model) == tasks.end()) tasks.push_back(c.model);
+    if (std::find(rows.begin(), rows.end(), Row{c.model, c.offset_free}) == rows.end()) {
+      rows.emplace_back(c.model, c.offset_free);
+    }
+    if (const CellResult* r = find(c)) tolerances.insert(r->reach_tolerance);
   }
-  auto cell_of = [&](const std::string& task, const std::string& f, const std::string& mode) -> const CellResult* {
+  auto cell_of = [&](const Row& row, const std::string& f, const std::string& mode) -> const CellResult* {
     for (const Cell& c : cells) {
-      if (c.model == task && c.formulation == f && c.variant() == mode) return find(c);
+      if (c.model == row.first && c.offset_free == row.second && c.formulation == f && c.variant() == mode) {
+        return find(c);
+      }
     }
     return nullptr;
   };
   auto ms = [](const CellResult* r) {
-    return r ? fmt(r->mean_ms) + (r->diverged ? "*" : (r->reached() ? "" : "°")) : std::string("–");
+    return r ? fmt(r->mean_ms) + (r->diverged ? "*" : (r->reached ? "" : "°")) : std::string("–");
   };
+  auto on_off = [](bool on) { return std::string(on ? "on" : "off"); };
+  // one tolerance for all: said in the headers; else each run's beside its outcome
+  const bool one_tolerance = tolerances.size() == 1;
+  const std::string tolerance =
+      one_tolerance ? fmt(*tolerances.begin()) + " rad" : std::string("the task's reach_tolerance");
+  const bool shipped_list = opt.arms_tasks.empty() && opt.models_dir == SweepOptions{}.models_dir;
   std::ostringstream o;
   o << "# idmpc sweep: the real arms\n\n"
-    << "Each arm's reach task (`mjcf/arms.json`), torque limits from its actuators active in the OCP "
-    << "and at the plant. Mean ms per control update; `*` diverged (time averaged until then), "
-    << "`°` did not end within " << kReachTolerance << " rad of the target. The last column compares "
-    << "each formulation's fastest variant that reached the target. " << stages_note(opt) << "\n\n| task | n |";
+    << "Each task of `" << (shipped_list ? std::string("mjcf/arms.json") : arms_list(opt)) << "` under FD and ID, "
+    << "torque limits from the arm's actuators active in the OCP and at the plant. Offset-free tracking (a "
+    << "disturbance observer whose estimate enters the horizon model of both formulations): "
+    << (opt.offset_free == "task"   ? "as each task sets it"
+        : opt.offset_free == "both" ? "on and off for every task, side by side (`--offset-free both`)"
+                                    : on_off(opt.offset_free == "on") + " for every task (`--offset-free " +
+                                          opt.offset_free + "`)")
+    << ". Mean ms per control update; `*` diverged (time averaged until then), `°` did not end within "
+    << (one_tolerance ? tolerance + " of the target (max abs(q - qref); the tasks' reach_tolerance)"
+                      : std::string("its task's reach_tolerance of the target (max abs(q - qref); see the outcomes)"))
+    << ". The last column compares "
+    << "each formulation's fastest variant that reached the target. " << stages_note(opt)
+    << "\n\n| task | n | offset-free |";
   for (const auto& mode : modes) o << " FD " << mode << " | ID " << mode << " | ID/FD |";
-  o << " best ID / best FD |\n|---|---|";
+  o << " best ID / best FD |\n|---|---|---|";
   for (size_t k = 0; k < modes.size(); ++k) o << "---|---|---|";
   o << "---|\n";
   // a formulation's fastest variant that reached the target
-  auto best = [&](const std::string& task, const char* f) {
+  auto best = [&](const Row& row, const char* f) {
     double ms = NAN;
     for (const auto& mode : modes) {
-      const CellResult* r = cell_of(task, f, mode);
-      if (r && r->reached() && !(r->mean_ms >= ms)) ms = r->mean_ms;
+      const CellResult* r = cell_of(row, f, mode);
+      if (r && r->reached && !(r->mean_ms >= ms)) ms = r->mean_ms;
     }
     return ms;
   };
-  for (const auto& task : tasks) {
+  for (const Row& row : rows) {
     int n = 0;
     for (const auto& mode : modes) {
       for (const char* f : {"fd", "id"}) {
-        if (const CellResult* r = cell_of(task, f, mode)) n = r->cell.n;
+        if (const CellResult* r = cell_of(row, f, mode)) n = r->cell.n;
       }
     }
-    o << "| " << task << " | " << (n > 0 ? std::to_string(n) : "–") << " |";
+    o << "| " << row.first << " | " << (n > 0 ? std::to_string(n) : "–") << " | " << on_off(row.second) << " |";
     for (const auto& mode : modes) {
-      const CellResult *fd = cell_of(task, "fd", mode), *id = cell_of(task, "id", mode);
+      const CellResult *fd = cell_of(row, "fd", mode), *id = cell_of(row, "id", mode);
       o << ' ' << ms(fd) << " | " << ms(id) << " | " << fmt(fd && id ? id->mean_ms / fd->mean_ms : NAN, 2) << " |";
     }
-    o << ' ' << fmt(best(task, "id") / best(task, "fd"), 2) << " |\n";
+    o << ' ' << fmt(best(row, "id") / best(row, "fd"), 2) << " |\n";
   }
-  o << "\n## Outcomes\n\n| task | variant | reached | final max abs(q - qref) [rad] | steps with a clamped "
-       "torque | largest excess of the OCP's torques over their bounds [N m] |\n|---|---|---|---|---|---|\n";
-  for (const auto& task : tasks) {
+  o << "\n## Outcomes\n\n| task | variant | reached (" << (one_tolerance ? "< " : "within ") << tolerance
+    << ") | final max abs(q - qref) [rad] | offset-free (final max abs(d̂) [N m]) | steps with a contact "
+       "(largest normal force [N]) | steps with a clamped torque | largest excess of the OCP's torques over their "
+       "bounds [N m] |\n|---|---|---|---|---|---|---|---|\n";
+  for (const Row& row : rows) {
     for (const auto& mode : modes) {
       for (const char* f : {"fd", "id"}) {
-        const CellResult* r = cell_of(task, f, mode);
+        const CellResult* r = cell_of(row, f, mode);
         if (!r) continue;
-        o << "| " << task << " | " << (std::string(f) == "fd" ? "FD " : "ID ") << mode << " | "
-          << (r->diverged ? "diverged at " + fmt(r->diverged_at) + " s" : (r->reached() ? "yes" : "no")) << " | "
-          << fmt(r->final_q_error) << " | " << r->saturated_steps << " of " << r->steps << " | "
-          << fmt(r->max_violation) << " |\n";
+        std::string reached = r->diverged ? "diverged at " + fmt(r->diverged_at) + " s" : (r->reached ? "yes" : "no");
+        if (!one_tolerance) reached += " (< " + fmt(r->reach_tolerance) + ")";
+        o << "| " << row.first << " | " << (std::string(f) == "fd" ? "FD " : "ID ") << mode << " | " << reached
+          << " | " << fmt(r->final_q_error) << " | "
+          << (r->cell.offset_free ? "on (" + fmt(r->final_disturbance) + ")" : std::string("off")) << " | "
+          << r->contact_steps << (r->contact_steps > 0 ? " (" + fmt(r->max_contact_force) + ")" : std::string())
+          << " | " << r->saturated_steps << " of " << r->steps << " | " << fmt(r->max_violation) << " |\n";
       }
     }
   }
@@ -368,7 +535,7 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
         return c;
       }
     }
-    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, "", n, N, kmax, ""};
+    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, "", n, N, kmax, "", false};
   };
   // ours (paper) for the ID/FD ratio of one grid point
   auto ratio = [&](const std::string& table, const std::string& mode, int n, int N, int kmax) {
@@ -486,9 +653,13 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   const Task task = cell_task(base, c, opt);
   std::string log;
   if (opt.logs) {
-    log = opt.out_dir + "/log_" + c.table + "_" + c.model.substr(0, c.model.rfind('.')) + "_" + c.formulation + "_" +
-          c.derivatives + (c.shooting == "single" ? "" : "_" + c.shooting) + "_N" + std::to_string(c.N) + "_k" +
-          std::to_string(c.kmax) + ".csv";
+    // the model or task file without its extension, a listed task's directories joined by '_'
+    std::string name = std::filesystem::path(c.model).replace_extension().string();
+    std::replace(name.begin(), name.end(), '/', '_');
+    log = opt.out_dir + "/log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
+          (c.shooting == "single" ? "" : "_" + c.shooting) + "_N" + std::to_string(c.N) + "_k" +
+          std::to_string(c.kmax) + (c.table == kArmsTable ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
+          ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
   const RunSummary s = run_swingup(task, log, true).summary;
@@ -505,6 +676,12 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   r.p95_ms = s.p95_update_ms;
   r.final_q_error = s.final_q_error;
   r.final_v_norm = s.final_v_norm;
+  r.reached = s.reached;
+  r.reach_tolerance = s.task.reach_tolerance;
+  r.contact_steps = s.contact_steps;
+  r.max_contact_force = s.max_contact_force;
+  r.final_disturbance = 0;
+  for (double d : s.final_disturbance) r.final_disturbance = std::max(r.final_disturbance, std::abs(d));
   return r;
 }
 
@@ -515,8 +692,8 @@ void run(const SweepOptions& opt) {
   const Task base = load_task(tables.task);
   const std::vector<Cell> cells = grid(opt, tables, base);
   for (const Cell& c : cells) {
-    if (!fs::exists(in_models(opt, c.model))) {
-      throw std::invalid_argument("'" + in_models(opt, c.model) + "' not found (see --models)");
+    if (!fs::exists(cell_file(opt, c))) {
+      throw std::invalid_argument("'" + cell_file(opt, c) + "' not found (see --models)");
     }
   }
   fs::create_directories(opt.out_dir);
@@ -537,7 +714,7 @@ void run(const SweepOptions& opt) {
   // rewrite the finished cells cleanly, then append each new cell as soon as it ends
   {
     AtomicFile f(csv);
-    f.stream() << kCsvHeader << '\n';
+    f.stream() << csv_header() << '\n';
     for (const Cell& c : cells) {
       const auto it = done.find(c.key());
       if (it != done.end()) f.stream() << csv_row(tables, it->second) << '\n';
@@ -548,15 +725,19 @@ void run(const SweepOptions& opt) {
   int index = 0;
   for (const Cell& c : cells) {
     ++index;
-    std::fprintf(stderr, "[%d/%zu] %s %s %s N=%d kmax=%d: ", index, cells.size(), c.model.c_str(),
-                 c.formulation == "fd" ? "FD" : "ID", c.variant().c_str(), c.N, c.kmax);
+    const bool arm = c.table == kArmsTable;
+    std::fprintf(stderr, "[%d/%zu] %s %s %s%s N=%d kmax=%d: ", index, cells.size(), c.model.c_str(),
+                 c.formulation == "fd" ? "FD" : "ID", c.variant().c_str(),
+                 arm ? (c.offset_free ? ", offset-free on" : ", offset-free off") : "", c.N, c.kmax);
     if (done.count(c.key())) {
       std::fprintf(stderr, "done earlier\n");
       continue;
     }
     const CellResult r = run_cell(base, c, opt);
-    std::fprintf(stderr, "%.4g ms per update, %s\n", r.mean_ms,
-                 r.diverged ? ("diverged at " + fmt(r.diverged_at) + " s").c_str() : "ok");
+    const std::string outcome = r.diverged ? "diverged at " + fmt(r.diverged_at) + " s"
+                                : arm      ? (r.reached ? "reached the target" : "did not reach the target")
+                                           : "ok";
+    std::fprintf(stderr, "%.4g ms per update, %s\n", r.mean_ms, outcome.c_str());
     append << csv_row(tables, r) << '\n' << std::flush;
     done[c.key()] = r;
     AtomicFile f(md);
@@ -574,12 +755,24 @@ void run(const SweepOptions& opt) {
 void register_sweep(CLI::App& app) {
   auto opt = std::make_shared<SweepOptions>();
   CLI::App* sub = app.add_subcommand("sweep", "The paper's grids closed-loop (Tables 1-3), resumable");
-  sub->add_option("--out", opt->out_dir, "output directory (sweep.csv, sweep.md)")->capture_default_str();
-  sub->add_option("--models", opt->models_dir, "directory with the models of mjcf/paper_tables.json")
+  sub->add_option("--out", opt->out_dir, "output directory (sweep.csv and sweep.md; arms: arms.csv and arms.md)")
       ->capture_default_str();
-  sub->add_option("--tables", opt->tables,
-                  "12 (arm4 N x kmax), 3 (n = 8..32), all, or arms (the real arms' reach tasks of "
-                  "mjcf/arms.json, written to arms.csv and arms.md)")
+  sub->add_option("--models", opt->models_dir,
+                  "directory with the models of mjcf/paper_tables.json (and arms.json, the default --arms-tasks)")
+      ->capture_default_str();
+  CLI::Option* tables =
+      sub->add_option("--tables", opt->tables,
+                      "12 (arm4 N x kmax), 3 (n = 8..32), all, or arms (each task of --arms-tasks under FD and ID, "
+                      "written to arms.csv and arms.md)")
+          ->capture_default_str();
+  CLI::Option* arms_tasks =
+      sub->add_option("--arms-tasks", opt->arms_tasks,
+                      "the tasks of --tables arms (implied when --tables is not given): a JSON file "
+                      "{\"description\": ..., \"tasks\": [task files, relative to it]} like mjcf/arms.json, the "
+                      "default (arms.json of --models)");
+  sub->add_option("--offset-free", opt->offset_free,
+                  "arms: offset-free tracking (the disturbance observer) as each task sets it (task), on, off, or "
+                  "both: every task with it on and off, side by side")
       ->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();
   sub->add_option("--shooting", opt->shooting, "single, multiple or both (DESIGN §9)")->capture_default_str();
@@ -590,8 +783,9 @@ void register_sweep(CLI::App& app) {
   sub->add_flag("!--no-simd-stages", opt->simd_stages,
                 "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "
                 "the paper's arithmetic");
-  sub->callback([opt, duration] {
+  sub->callback([opt, duration, tables, arms_tasks] {
     opt->duration_given = duration->count() > 0;
+    if (arms_tasks->count() > 0 && tables->count() == 0) opt->tables = kArmsTable;
     run(*opt);
   });
 }

@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <atomic>
 #include <iterator>
+#include <map>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -773,6 +774,156 @@ TEST_F(Cli, SweepRunsStageByStageOnRequest) {
   ASSERT_EQ(idmpc("sweep --tables 3 --duration 0.02 --out lanes").code, 0);
   const std::string lanes = slurp(dir_ / "lanes" / "sweep.md");
   EXPECT_NE(lanes.find("Matrix mode runs its stage derivatives in SIMD lanes"), std::string::npos) << lanes;
+}
+
+// a one-joint arm hanging onto a floor it touches from the start (a contact at every step),
+// torque-limited; its task asks for 3 mrad in 0.05 s, reached within its own tolerance of 0.02
+// rad (not within the 1e-3 rad of the paper's swing-up), offset-free as real arms are by default
+const char* kTouchModel = R"(<mujoco model="touch">
+  <worldbody>
+    <geom name="floor" type="plane" size="1 1 0.1"/>
+    <body name="link" pos="0 0 0.5">
+      <joint name="hinge" type="hinge" axis="0 1 0" damping="0.1"/>
+      <geom type="capsule" fromto="0 0 0 0 0 -0.46" size="0.05" mass="1"/>
+    </body>
+  </worldbody>
+  <actuator><motor joint="hinge" ctrllimited="true" ctrlrange="-5 5"/></actuator>
+</mujoco>
+)";
+const char* kTouchTask =
+    R"({"model": "touch.xml", "q0": [0], "qref": [0.003], "reach_tolerance": 0.02, "duration": 0.05})";
+
+// the CSV of a sweep as rows of named fields
+std::vector<std::map<std::string, std::string>> csv_rows(const fs::path& csv) {
+  const std::vector<std::string> lines = lines_of(slurp(csv));
+  std::vector<std::map<std::string, std::string>> rows;
+  if (lines.empty()) return rows;
+  const std::vector<std::string> header = split(lines[0]);
+  for (size_t k = 1; k < lines.size(); ++k) {
+    const std::vector<std::string> f = split(lines[k]);
+    EXPECT_EQ(f.size(), header.size()) << "line " << k + 1;
+    std::map<std::string, std::string> row;
+    for (size_t i = 0; i < std::min(f.size(), header.size()); ++i) row[header[i]] = f[i];
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// a user's own list of arm tasks (--arms-tasks, which implies --tables arms): each task as its
+// file says (its duration, its reach tolerance, offset-free on), paths relative to the list,
+// with whether it reached the target, offset-free tracking and the contacts in both tables
+TEST_F(Cli, SweepRunsAUsersListOfArmTasks) {
+  fs::create_directories(dir_ / "mine");
+  write("mine/touch.xml", kTouchModel);
+  write("mine/touch.json", kTouchTask);
+  write("mine/list.json", R"({"description": "one arm on a floor", "tasks": ["touch.json"]})");
+  const Result r = idmpc("sweep --arms-tasks mine/list.json --derivatives adjoint --out out");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(dir_ / "out" / "arms.csv");
+  ASSERT_EQ(rows.size(), 2u) << "FD and ID";
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.at("formulation"));
+    EXPECT_EQ(row.at("table"), "arms");
+    EXPECT_EQ(row.at("model"), "touch.json");
+    EXPECT_EQ(row.at("steps"), "50");  // the task's own 0.05 s
+    EXPECT_EQ(row.at("diverged"), "0");
+    EXPECT_EQ(row.at("offset_free"), "1");
+    EXPECT_GT(std::stod(row.at("max_final_disturbance")), 0) << "the observer ran";
+    EXPECT_EQ(row.at("reach_tolerance"), "0.02");
+    EXPECT_GT(std::stod(row.at("final_q_error")), 1e-3);
+    EXPECT_EQ(row.at("reached"), "1");
+    EXPECT_EQ(row.at("contact_steps"), "50");
+    EXPECT_GT(std::stod(row.at("max_contact_force")), 0);
+  }
+  const std::string md = slurp(dir_ / "out" / "arms.md");
+  EXPECT_NE(md.find("Each task of `mine/list.json`"), std::string::npos) << md;
+  EXPECT_NE(md.find("`°` did not end within 0.02 rad of the target"), std::string::npos) << md;
+  EXPECT_NE(md.find("| task | n | offset-free | FD adjoint | ID adjoint | ID/FD | best ID / best FD |"),
+            std::string::npos) << md;
+  EXPECT_NE(md.find("| touch.json | 1 | on |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| reached (< 0.02 rad) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("steps with a contact (largest normal force [N])"), std::string::npos) << md;
+  // reached, final error, offset-free (d̂), contact steps (force), clamped steps
+  const std::regex outcome(R"(\| touch\.json \| ID adjoint \| yes \| 0\.003 \| on \([0-9.e+-]+\) \| )"
+                           R"(50 \([0-9.e+-]+\) \| 0 of 50 \|)");
+  EXPECT_TRUE(std::regex_search(md, outcome)) << md;
+}
+
+// a list that cannot be read, or that names a task that cannot run, is refused with one line
+// naming it, before any cell runs and before any output is made
+TEST_F(Cli, SweepRefusesABadListOfArmTasksBeforeAnyCell) {
+  write("touch.xml", kTouchModel);
+  write("touch.json", kTouchTask);
+  write("no_model.json", R"({"model": "absent.xml", "qref": [0]})");
+  write("two_joints.json", R"({"model": "touch.xml", "q0": [0], "qref": [0, 0]})");
+  write("missing.json", R"({"tasks": ["touch.json", "absent.json"]})");
+  write("modelless.json", R"({"tasks": ["touch.json", "no_model.json"]})");
+  write("misfit.json", R"({"tasks": ["touch.json", "two_joints.json"]})");
+  write("empty.json", R"({"tasks": []})");
+  write("twice.json", R"({"tasks": ["touch.json", "touch.json"]})");
+  const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
+      {"--arms-tasks none.json", {"'none.json'", "--arms-tasks"}},
+      {"--arms-tasks missing.json", {"'missing.json'", "'absent.json'"}},
+      {"--arms-tasks modelless.json", {"'modelless.json'", "'no_model.json'", "absent.xml"}},
+      {"--arms-tasks misfit.json", {"'misfit.json'", "'two_joints.json'", "qref"}},
+      {"--arms-tasks empty.json", {"'empty.json'", "no task"}},
+      {"--arms-tasks twice.json", {"'twice.json'", "'touch.json' twice"}},
+      {"--tables 3 --arms-tasks touch.json", {"--arms-tasks", "--tables arms"}},
+      {"--tables 3 --offset-free off", {"--offset-free", "--tables arms"}},
+      {"--arms-tasks twice.json --offset-free sometimes", {"--offset-free", "sometimes"}}};
+  for (const auto& [args, needles] : cases) {
+    SCOPED_TRACE(args);
+    const Result r = idmpc("sweep " + args + " --out out");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(r.err.rfind("idmpc: error: ", 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    for (const std::string& needle : needles) EXPECT_NE(r.err.find(needle), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir_ / "out")) << "no output before the cells";
+  }
+}
+
+// the offset-free axis: each arm with offset-free tracking on and off side by side, part of each
+// cell's settings (a resume with another axis is refused)
+TEST_F(Cli, SweepHasAnOffsetFreeAxis) {
+  write("touch.xml", kTouchModel);
+  write("touch.json", kTouchTask);
+  write("list.json", R"({"tasks": ["touch.json"]})");
+  const std::string args = "sweep --arms-tasks list.json --derivatives adjoint --offset-free both --out out";
+  const Result r = idmpc(args);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(dir_ / "out" / "arms.csv");
+  ASSERT_EQ(rows.size(), 4u) << "FD and ID, each with offset-free tracking on and off";
+  for (const char* f : {"fd", "id"}) {
+    std::multiset<std::string> offset_free;
+    for (const auto& row : rows) {
+      if (row.at("formulation") != f) continue;
+      offset_free.insert(row.at("offset_free"));
+      // the observer runs exactly in the cells that say so
+      if (row.at("offset_free") == "1") EXPECT_GT(std::stod(row.at("max_final_disturbance")), 0) << f;
+      else EXPECT_EQ(row.at("max_final_disturbance"), "0") << f;
+    }
+    EXPECT_EQ(offset_free, (std::multiset<std::string>{"0", "1"})) << f;
+  }
+  const std::string md = slurp(dir_ / "out" / "arms.md");
+  EXPECT_NE(md.find("on and off for every task, side by side (`--offset-free both`)"), std::string::npos) << md;
+  const size_t on = md.find("| touch.json | 1 | on |"), off = md.find("| touch.json | 1 | off |");
+  ASSERT_NE(on, std::string::npos) << md;
+  ASSERT_NE(off, std::string::npos) << md;
+  EXPECT_EQ(md.find('\n', on) + 1, off) << "the two rows of the arm follow each other: " << md;
+  EXPECT_NE(md.find("| touch.json | ID adjoint | yes | 0.003 | off |"), std::string::npos) << md;
+
+  // resumed: every cell was done; with the task's own setting (on), the cells with it off are
+  // of other settings
+  const Result again = idmpc(args);
+  ASSERT_EQ(again.code, 0) << again.err;
+  EXPECT_EQ(again.err.find("ms per update"), std::string::npos) << again.err;
+  expect_error(idmpc("sweep --arms-tasks list.json --derivatives adjoint --out out"),
+               {"arms.csv", "other settings", "offset-free off"});
+  const Result only_off = idmpc("sweep --arms-tasks list.json --derivatives adjoint --offset-free off --out off");
+  ASSERT_EQ(only_off.code, 0) << only_off.err;
+  const auto off_rows = csv_rows(dir_ / "off" / "arms.csv");
+  ASSERT_EQ(off_rows.size(), 2u);
+  for (const auto& row : off_rows) EXPECT_EQ(row.at("offset_free"), "0");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -13,12 +13,12 @@ namespace idmpc {
 namespace {
 
 // the "auto" weights (horizon_setup.hpp)
-constexpr double kAutoQq = 100, kAutoQv = 10, kAutoTorqueCost = 2.5;
+constexpr double kAutoQq = 100, kAutoQv = 10, kAutoTorqueCost = 10;
 // without a declared limit: the holding torque twice over plus this acceleration of the
 // joint's own inertia [rad/s²]
 constexpr double kAutoAcceleration = 20;
 // the fastest closed-loop motion the horizon step Δτ resolves: ω·Δτ ≤ this
-constexpr double kAutoStepFraction = 0.5;
+constexpr double kAutoStepFraction = 0.35;
 
 std::string text(double x) {
   std::ostringstream o;
@@ -55,10 +55,10 @@ VecX<double> inverse_inertia_diagonal(const Model& model, const std::vector<VecX
   return out;
 }
 
-// "auto" R: the torque-range scale 2.5/τ_j², raised where the regulator it makes would be faster
+// "auto" R: the torque-range scale 10/τ_j², raised where the regulator it makes would be faster
 // than the horizon step resolves. For joint j alone (effective inertia m_j = 1/(M⁻¹)_jj at its
 // lightest over q0 and q_ref) the LQR of ½Q_q e² + ½R u² has stiffness √(Q_q/R) and frequency
-// ω = (Q_q/R)^¼/√m_j; ω·Δτ ≤ ½ needs R ≥ Q_q/(m_j² ω_max⁴), ω_max = 1/(2Δτ).
+// ω = (Q_q/R)^¼/√m_j; ω·Δτ ≤ 0.35 needs R ≥ Q_q/(m_j² ω_max⁴), ω_max = 0.35/Δτ.
 OcpWeights auto_weights(const ResolvedTask& r, const Model& model, const Model& stepped, double dtau,
                         const VecX<double>& lower, const VecX<double>& upper, std::vector<std::string>& notes) {
   OcpWeights w = r.weights;
@@ -89,8 +89,8 @@ OcpWeights auto_weights(const ResolvedTask& r, const Model& model, const Model& 
       w.R[j] = std::max(w.R[j], w.Qq[j] * inv_inertia[j] * inv_inertia[j] / std::pow(omega, 4));
     }
     notes.push_back("weights \"auto\": Qq " + text(w.Qq.maxCoeff()) + ", Qv " + text(w.Qv.maxCoeff()) +
-                    ", R = max(2.5/tau_max^2, Qq/(m^2 omega^4)) = [" + list(w.R) + "] (omega = " + text(omega) +
-                    " rad/s, the fastest motion the horizon step resolves)");
+                    ", R = max(10/tau_max^2, Qq/(m^2 omega^4)) = [" + list(w.R) + "] (omega = " + text(omega) +
+                    " rad/s, well inside what the horizon step resolves)");
   }
   return w;
 }
