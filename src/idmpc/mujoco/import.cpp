@@ -343,8 +343,15 @@ std::vector<std::string> unmodeled_features(const mjModel* m) {
   for (int j = 0; j < m->njnt; ++j) {
     if (m->jnt_limited[j]) out.push_back("limit on " + joint_label(m, j));
   }
+  // friction loss: smooth in the horizon of both formulations; what it is not (stiction) is left
+  // to the disturbance observer
+  std::vector<std::string> rubbing;
   for (int i = 0; i < m->nv; ++i) {
-    if (m->dof_frictionloss[i] > 0) out.push_back("friction loss on " + joint_label(m, m->dof_jntid[i]));
+    if (m->dof_frictionloss[i] > 0) rubbing.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
+  }
+  if (!rubbing.empty()) {
+    out.push_back("friction loss on " + std::to_string(rubbing.size()) + " joint(s) (" + name_list(rubbing) +
+                  ") as a constraint with stiction (the horizon has it as smooth friction)");
   }
   if (m->ntendon > 0) out.push_back(std::to_string(m->ntendon) + " tendon(s)");
   if (m->neq > 0) out.push_back(std::to_string(m->neq) + " equality constraint(s)");
