@@ -117,19 +117,19 @@ TEST(ControllerSettings, TheTargetChangesBetweenUpdates) {
 // a task file becomes the same run as `idmpc swingup` makes of it: what it changed and chose is
 // said before it runs; bad values name their field
 TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
-  Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/fr3_reach.json");
+  Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/lite6_reach.json");  // position servos
   task.duration = 0.05;
   mj::TaskRun run(task);
-  EXPECT_EQ(run.n(), 7);
+  EXPECT_EQ(run.n(), 6);
   bool servos = false, auto_weights = false;
   for (const auto& s : run.notices()) {
     servos = servos || s.find("servos") != std::string::npos;
     auto_weights = auto_weights || s.find("weights \"auto\"") != std::string::npos;
   }
   EXPECT_TRUE(servos && auto_weights);
-  EXPECT_EQ(run.horizon().weights.R.size(), 7);
+  EXPECT_EQ(run.horizon().weights.R.size(), 6);
   EXPECT_GT(run.controller().disturbance_observer(), 0) << "offset-free by default on real arms";
-  EXPECT_EQ(run.controller().problem().m(), 7);
+  EXPECT_EQ(run.controller().problem().m(), 6);
   int rows = 0;
   const mj::RunResult r = run.run([&](const mj::StepRecord&) { ++rows; });
   EXPECT_FALSE(r.diverged) << r.divergence_reason;
@@ -138,12 +138,12 @@ TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
   const RunSummary s = run.summary(r);
   EXPECT_EQ(s.steps, r.steps);
   EXPECT_EQ(s.final_q_error, r.final_q_error);
-  EXPECT_EQ(s.R.size(), 7u);
+  EXPECT_EQ(s.R.size(), 6u);
 
   task.qref = {0.1, 0.2};
   try {
     mj::TaskRun bad(task);
-    FAIL() << "a qref of 2 values on 7 joints was accepted";
+    FAIL() << "a qref of 2 values on 6 joints was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("qref"), std::string::npos) << e.what();
   }
