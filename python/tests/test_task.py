@@ -122,3 +122,43 @@ def test_bad_task_file_names_file_and_field(tmp_path):
     with pytest.raises(ValueError) as e:
         idmpc.load_task(str(path))
     assert str(e.value) == f"task file '{path}', 'weights': unknown field 'Qz'"
+
+
+# each attribute and where the task file's JSON keeps it
+FIELDS = {
+    "description": ("description",), "model": ("model",), "qref": ("qref",), "duration": ("duration",),
+    "formulation": ("formulation",), "derivatives": ("derivatives",), "simd_stages": ("simd_stages",),
+    "direct_torque": ("direct_torque",), "actuate_every_joint": ("actuate_every_joint",),
+    "offset_free": ("offset_free",), "observer_time_constant": ("observer_time_constant",),
+    "reach_tolerance": ("reach_tolerance",), "Qq": ("weights", "Qq"), "Qv": ("weights", "Qv"),
+    "Qa": ("weights", "Qa"), "R": ("weights", "R"), "Qa_fallback": ("weights", "Qa_fallback"),
+    "N": ("cgmres", "N"), "kmax": ("cgmres", "kmax"), "Tf": ("cgmres", "Tf"), "alpha": ("cgmres", "alpha"),
+    "dt": ("cgmres", "dt"), "zeta": ("cgmres", "zeta"), "h": ("cgmres", "h"),
+    "init_full_horizon": ("cgmres", "init_full_horizon"), "shooting": ("cgmres", "shooting"),
+}
+
+
+@pytest.mark.parametrize("name", ["paper_swingup.json"] + REACH_TASKS)
+def test_each_attribute_is_its_own_field(name):
+    task = idmpc.load_task(str(MJCF / name), base=idmpc.Task() if name.startswith("paper") else None)
+    d = task.to_dict()
+    for attribute, keys in FIELDS.items():
+        value = d
+        for key in keys:
+            value = value[key]
+        if value == "auto":
+            value = []
+        if isinstance(getattr(task, attribute), list) and not isinstance(value, list):
+            value = [value]
+        assert getattr(task, attribute) == value, attribute
+    # a value written to each attribute lands in its field alone
+    for i, (attribute, keys) in enumerate(FIELDS.items()):
+        if isinstance(getattr(task, attribute), float):
+            changed = idmpc.Task(task)
+            setattr(changed, attribute, 1000.0 + i)
+            after = changed.to_dict()
+            value = after
+            for key in keys:
+                value = value[key]
+            assert value == 1000.0 + i, attribute
+            assert json.dumps(after).count(str(1000.0 + i)) == 1, attribute
