@@ -9,9 +9,7 @@
 #include <stdexcept>
 
 #include "app/atomic_file.hpp"
-#include "idmpc/experiment/horizon_setup.hpp"
-#include "idmpc/mujoco/import.hpp"
-#include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc::app {
 
@@ -98,137 +96,27 @@ Task make_task(const TaskOverrides& o) {
 
 namespace {
 
-// MuJoCo's friction loss per dof, zero where the model disables it
-VecX<double> friction_loss(const mjModel* m) {
-  VecX<double> f = VecX<double>::Zero(m->nv);
-  if (m->opt.disableflags & (mjDSBL_FRICTIONLOSS | mjDSBL_CONSTRAINT)) return f;
-  for (int i = 0; i < m->nv; ++i) f[i] = m->dof_frictionloss[i];
-  return f;
-}
-
 SwingupOutcome run_once(const Task& task, const std::string& log_path) {
-  // validate everything before any output is opened
-  const mj::LoadedModel loaded = mj::load_model_translated(task.model);
-  const mjModel* m = loaded.model.get();
-  mj::ImportOptions import_options;
-  import_options.direct_torque = task.direct_torque;
-  import_options.actuate_every_joint = task.actuate_every_joint;
-  import_options.joint_force_lower = loaded.joint_force_lower;
-  import_options.joint_force_upper = loaded.joint_force_upper;
-  const mj::ImportedModel imported = mj::import_model(m, task.model, import_options);
-  const Model& model = imported.model;
-  const int n = model.n;
-  ResolvedTask r = resolve(task, n);
-  if (r.q0.size() == 0) r.q0 = mj::keyframe_qpos(m, task.q0_rule, task.model);
-
-  // the actuators' ranges, narrowed by the task's limit: constraints of the OCP (DESIGN §8)
-  // and the clamp of every torque the plant receives
-  const VecX<double> lower = imported.actuation.torque_lower.cwiseMax(-r.torque_limit);
-  const VecX<double> upper = imported.actuation.torque_upper.cwiseMin(r.torque_limit);
-  const bool limited = (lower.array().isFinite() || upper.array().isFinite()).any();
-  const TorqueLimits limits = limited ? TorqueLimits{lower, upper} : TorqueLimits{};
-  // the horizon's model (the plant's passive forces, DESIGN §10) and the "auto" weights, the
-  // same for both formulations
-  mj::Plant plant(m, imported.actuation);
-  const std::string timestep_warning = plant.set_control_period(r.cgmres.dt);
-  const HorizonSetup setup =
-      setup_horizon(task, r, model, friction_loss(m), lower, upper, plant.timestep());
-  Controller controller(OcpProblem(setup.horizon_model, r.formulation, r.derivatives, setup.weights, r.qref,
-                                   task.N, limits),
-                        r.cgmres, &setup.plant_model);
-  controller.nlp().set_stage_batching(task.simd_stages);
-  controller.set_torque_limits(lower, upper);
-  controller.set_disturbance_observer(task.offset_free ? task.observer_time_constant : 0.0);
-  // what the run does not model, had to change or chose by itself, said before it starts
-  std::vector<std::string> notices;
-  if (!loaded.translations.empty()) notices.push_back(loaded.notice());
-  notices.insert(notices.end(), imported.notices.begin(), imported.notices.end());
-  notices.insert(notices.end(), setup.notes.begin(), setup.notes.end());
-  std::vector<std::string> warnings = r.warnings;
-  std::vector<std::string> unbounded;
-  for (int j = 0; j < n; ++j) {
-    if (!std::isfinite(lower[j]) && !std::isfinite(upper[j])) unbounded.push_back(model.joint_names[j]);
-  }
-  if (!unbounded.empty()) {
-    std::string list;
-    for (const auto& j : unbounded) list += (list.empty() ? "'" : ", '") + j + "'";
-    warnings.push_back("no torque limit is declared for joint(s) " + list +
-                       ": their torques are unbounded (give --torque-limit or the actuators' forcerange)");
-  }
-  if (!imported.unmodeled.empty()) {
-    std::string list;
-    for (const auto& f : imported.unmodeled) list += (list.empty() ? "" : "; ") + f;
-    warnings.push_back("the plant has features the controller does not model: " + list);
-  }
-  for (const auto& w : mj::range_violations(m, r.q0, "q0")) warnings.push_back(w);
-  for (const auto& w : mj::range_violations(m, r.qref, "qref")) warnings.push_back(w);
-  if (!timestep_warning.empty()) warnings.push_back(timestep_warning);
-  for (const auto& w : notices) std::cerr << "idmpc: " << w << "\n";
-  for (const auto& w : warnings) std::cerr << "idmpc: warning: " << w << "\n";
-  mj::ClosedLoopSettings ls;
-  ls.duration = task.duration;
-  ls.q0 = r.q0;
-  ls.v0 = VecX<double>::Zero(n);
+  // everything is validated before any output is opened
+  mj::TaskRun run(task);
+  for (const auto& w : run.notices()) std::cerr << "idmpc: " << w << "\n";
+  for (const auto& w : run.warnings()) std::cerr << "idmpc: warning: " << w << "\n";
+  const bool limited = (run.torque_lower().array().isFinite() || run.torque_upper().array().isFinite()).any();
 
   // the log streams to a temporary file, renamed once the run has ended
   std::optional<AtomicFile> log;
   std::optional<RunLogWriter> writer;
   if (!log_path.empty()) {
     log.emplace(log_path);
-    writer.emplace(log->stream(), n, limited);
+    writer.emplace(log->stream(), run.n(), limited);
   }
   auto on_step = [&](const mj::StepRecord& s) {
     if (writer) writer->row(s.t, s.q, s.v, s.u, s.u_commanded, s.residual, s.update_ms);
   };
-  mj::RunResult result = mj::run_closed_loop(plant, controller, ls, on_step);
+  mj::RunResult result = run.run(on_step);
   if (log) log->commit();
-
-  RunSummary s;
-  s.task = task;
-  s.n = n;
-  s.simd_stages = controller.nlp().stage_batching() ||
-                  (controller.problem().costate_lanes() && r.cgmres.shooting == ShootingScheme::kMultiple);
-  s.zeta = controller.solver().settings().zeta;
-  s.steps = result.steps;
-  s.diverged = result.diverged;
-  s.diverged_at = result.diverged_at;
-  s.divergence_reason = result.divergence_reason;
-  const auto& ms = result.update_ms;
-  s.mean_update_ms = result.mean_update_ms;
-  s.p50_update_ms = mj::percentile(ms, 50);
-  s.p95_update_ms = mj::percentile(ms, 95);
-  s.max_update_ms = result.updates > 0 ? result.max_update_ms : std::numeric_limits<double>::quiet_NaN();
-  s.rollout_ms = result.mean_phase_ms.rollout;
-  s.costate_ms = result.mean_phase_ms.costate;
-  s.gmres_ms = result.mean_phase_ms.gmres;
-  s.evaluations_per_update = result.evaluations_per_update;
-  s.init_residual = result.init_residual;
-  s.final_q_error = result.final_q_error;
-  s.final_v_norm = result.final_v_norm;
-  s.mean_residual = result.mean_residual;
-  s.unmodeled = imported.unmodeled;
-  s.notices = notices;
-  s.warnings = warnings;
-  s.reached = !s.diverged && s.final_q_error < task.reach_tolerance;
-  s.contact_steps = result.contact_steps;
-  s.max_contact_force = result.max_contact_force;
-  s.final_disturbance.assign(result.final_disturbance.data(),
-                             result.final_disturbance.data() + result.final_disturbance.size());
-  s.implicit_damping = setup.implicit_damping;
-  s.friction_velocity.assign(setup.friction_velocity.data(), setup.friction_velocity.data() + n);
-  s.Qq.assign(setup.weights.Qq.data(), setup.weights.Qq.data() + n);
-  s.Qv.assign(setup.weights.Qv.data(), setup.weights.Qv.data() + n);
-  s.R.assign(setup.weights.R.data(), setup.weights.R.data() + n);
-  s.unbounded_joints = unbounded;
-  s.torque_lower.assign(lower.data(), lower.data() + n);
-  s.torque_upper.assign(upper.data(), upper.data() + n);
-  s.saturated_steps = result.saturated_steps;
-  s.saturated_any = result.saturated_any;
-  s.max_constraint_violation = result.max_constraint_violation;
-  if (s.diverged) s.divergence_hint = divergence_hint(task, setup.damping_step_ratio);
-  s.model_hash = file_hash(task.model);  // render checks a log's model and summary by these
-  s.log_hash = file_hash(log_path);
-  return SwingupOutcome{std::move(result), std::move(s)};
+  RunSummary summary = run.summary(result, log_path);
+  return SwingupOutcome{std::move(result), std::move(summary)};
 }
 
 }  // namespace

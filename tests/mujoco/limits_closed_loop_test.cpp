@@ -10,11 +10,7 @@
 #include <string>
 
 #include "idmpc/experiment/task.hpp"
-#include "idmpc/mujoco/closed_loop.hpp"
-#include "idmpc/mujoco/import.hpp"
-#include "idmpc/mujoco/load.hpp"
-#include "idmpc/mujoco/plant.hpp"
-#include "idmpc/solver/controller.hpp"
+#include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc {
 namespace {
@@ -32,28 +28,18 @@ TEST_P(LimitsClosedLoop, PandaReachStaysWithinItsTorqueLimitsAndSettles) {
   Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/panda_reach.json");
   task.formulation = GetParam() == Formulation::kForwardDynamics ? "fd" : "id";
   task.derivatives = "adjoint";
-  const mj::ModelPtr m = mj::load_model(task.model);
-  const mj::ImportedModel imported = mj::import_model(m.get(), task.model);
-  const int n = imported.model.n;
-  ASSERT_EQ(n, 7);
-  const ResolvedTask r = resolve(task, n);
-  ASSERT_TRUE(r.cgmres.init_full_horizon);
-  const VecX<double> lower = imported.actuation.torque_lower, upper = imported.actuation.torque_upper;
+  task.duration = 3.0;
+  mj::TaskRun run(task);
+  ASSERT_EQ(run.n(), 7);
+  ASSERT_TRUE(run.resolved().cgmres.init_full_horizon);
+  const VecX<double> lower = run.torque_lower(), upper = run.torque_upper();
   ASSERT_TRUE(lower.allFinite() && upper.allFinite()) << "the Panda's actuators bound every joint";
-
-  Controller controller(OcpProblem(imported.model, r.formulation, r.derivatives, r.weights, r.qref, task.N,
-                                   TorqueLimits{lower, upper}),
-                        r.cgmres);
-  controller.set_torque_limits(lower, upper);
-  mj::Plant plant(m.get(), imported.actuation);
-  mj::ClosedLoopSettings ls;
-  ls.duration = 3.0;
-  ls.q0 = mj::keyframe_qpos(m.get(), "home", task.model);
-  ls.v0 = VecX<double>::Zero(n);
+  ASSERT_EQ(run.controller().problem().m(), 7) << "the limits are the horizon's constraints";
+  mj::ClosedLoopSettings ls = run.loop_settings();
   ls.phase_timing = false;
 
   double worst_commanded = 0, worst_applied = 0;
-  const mj::RunResult res = mj::run_closed_loop(plant, controller, ls, [&](const mj::StepRecord& s) {
+  const mj::RunResult res = run.run(ls, [&](const mj::StepRecord& s) {
     worst_commanded = std::max(worst_commanded, s.u_commanded.cwiseQuotient(upper).cwiseAbs().maxCoeff());
     worst_applied = std::max(worst_applied, std::max((s.u - upper).maxCoeff(), (lower - s.u).maxCoeff()));
   });
@@ -61,7 +47,7 @@ TEST_P(LimitsClosedLoop, PandaReachStaysWithinItsTorqueLimitsAndSettles) {
   EXPECT_GE(worst_commanded, 0.99) << "the limits must bind at the start";
   EXPECT_LE(worst_commanded, kWorstCommanded);
   EXPECT_LE(worst_applied, 0.0) << "the plant received a torque beyond its actuator's range";
-  EXPECT_LE((res.final_q - r.qref).cwiseAbs().maxCoeff(), kSettled);
+  EXPECT_LE((res.final_q - run.resolved().qref).cwiseAbs().maxCoeff(), kSettled);
 }
 
 INSTANTIATE_TEST_SUITE_P(Formulations, LimitsClosedLoop,

@@ -127,7 +127,7 @@ TEST(NoMallocController, UpdatesWithTheObserverDoNotAllocate) {
     s.alpha = 0;  // a full horizon from the start, near the upright target
     s.init_full_horizon = true;
     Controller controller(OcpProblem(model, f, DerivativeMode::kAdjoint, paper_weights(4), VecX<double>::Zero(4), 25), s,
-                          &model);
+                          std::make_shared<const Model>(model));
     controller.set_disturbance_observer(0.02);
     // a plant: the same model with a constant torque the controller does not know, explicit Euler
     Data plant(model);

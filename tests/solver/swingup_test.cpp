@@ -16,12 +16,7 @@
 #include <vector>
 
 #include "idmpc/experiment/task.hpp"
-#include "idmpc/mujoco/closed_loop.hpp"
-#include "idmpc/mujoco/import.hpp"
-#include "idmpc/mujoco/load.hpp"
-#include "idmpc/mujoco/plant.hpp"
-#include "idmpc/solver/shooting.hpp"
-#include "idmpc/solver/controller.hpp"
+#include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc {
 namespace {
@@ -62,27 +57,25 @@ std::string describe(const Settings& s) {
          " kmax=" + std::to_string(s.kmax);
 }
 
-// one closed loop wired as `idmpc swingup` does, with the paper's settings; everything MuJoCo
-// loads is built up front so that several loops may then run on their own threads
+// one closed loop of the paper's task (mjcf/paper_swingup.json) as `idmpc swingup` runs it, with
+// this test's formulation and settings; everything MuJoCo loads is built up front so that
+// several loops may then run on their own threads
+Task paper_with(const Settings& settings) {
+  Task task = paper_task();
+  task.model = kArm4;
+  task.formulation = to_string(settings.formulation);
+  task.derivatives = to_string(settings.mode);
+  task.shooting = to_string(settings.shooting);
+  task.N = settings.N;
+  task.kmax = settings.kmax;
+  task.zeta = settings.zeta;
+  task.duration = settings.duration;
+  return task;
+}
+
 class Loop {
  public:
-  explicit Loop(const Settings& settings)
-      : m_(mj::load_model(kArm4)), imported_(mj::import_model(m_.get(), kArm4)) {
-    const Model& model = imported_.model;
-    const int n = model.n;
-    // the paper's task (mjcf/paper_swingup.json) with this test's formulation and settings
-    const ResolvedTask paper = resolve(paper_task(), n);
-    q_ref_ = paper.qref;
-    CgmresSettings cs = paper.cgmres;
-    cs.kmax = settings.kmax;
-    cs.zeta = settings.zeta;
-    cs.shooting = settings.shooting;
-    controller_ = std::make_unique<Controller>(
-        OcpProblem(model, settings.formulation, settings.mode, paper.weights, q_ref_, settings.N), cs);
-    plant_ = std::make_unique<mj::Plant>(m_.get(), imported_.actuation);
-    ls_.duration = settings.duration;
-    ls_.q0 = paper.q0;
-    ls_.v0 = VecX<double>::Zero(n);
+  explicit Loop(const Settings& settings) : task_run_(paper_with(settings)), ls_(task_run_.loop_settings()) {
     ls_.phase_timing = false;  // tests never time anything
     ls_.kept_update_times = settings.kept_update_times;
     run_.settings = settings;
@@ -94,7 +87,7 @@ class Loop {
   // runs the loop; an exception is kept in the result, never thrown across a thread
   void operator()() {
     try {
-      run_.result = mj::run_closed_loop(*plant_, *controller_, ls_, [&](const mj::StepRecord& r) {
+      run_.result = task_run_.run(ls_, [&](const mj::StepRecord& r) {
         ++run_.callbacks;
         run_.t.push_back(r.t);
         run_.q.push_back(r.q);
@@ -109,11 +102,7 @@ class Loop {
   LoopRun& run() { return run_; }
 
  private:
-  mj::ModelPtr m_;
-  mj::ImportedModel imported_;
-  VecX<double> q_ref_;
-  std::unique_ptr<Controller> controller_;
-  std::unique_ptr<mj::Plant> plant_;
+  mj::TaskRun task_run_;
   mj::ClosedLoopSettings ls_;
   LoopRun run_;
 };

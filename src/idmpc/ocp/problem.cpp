@@ -63,6 +63,13 @@ void OcpProblem::set_disturbance(const Vec& d_hat) {
   cost_.set_torque_reference(u_ref_);
 }
 
+void OcpProblem::set_target(const Vec& q_ref) {
+  cost_.set_q_ref(q_ref);
+  tau_ref_ = rnea(model_, stage_[0], cost_.q_ref(), w_.setZero(), la_.setZero());
+  u_ref_ = tau_ref_ - d_hat_;
+  cost_.set_torque_reference(u_ref_);
+}
+
 void OcpProblem::stage_dynamics(int i, In q, In v, In input, Out output) {
   assert(i >= 0 && i < N_);
   Data& d = stage_[static_cast<size_t>(i)];

@@ -66,6 +66,9 @@ class OcpProblem {
   /// (else std::invalid_argument). Held constant over the horizon.
   void set_disturbance(const Vec& d_hat);
   const Vec& disturbance() const { return d_hat_; }
+  /// @brief A new target q_ref (size n, finite; else std::invalid_argument): the torque
+  /// reference becomes ID(q_ref, 0, 0) − d̂. Allocation-free.
+  void set_target(const Vec& q_ref);
 
   /// @brief Unknowns of one stage: its input (n), dummy inputs d (m), multipliers ρ (m), in
   /// this order; the stage's block F_i of the residual has the same layout.

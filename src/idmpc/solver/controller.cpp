@@ -10,13 +10,59 @@
 
 namespace idmpc {
 
-Controller::Controller(OcpProblem problem, const CgmresSettings& settings, const Model* plant_model)
+namespace {
+
+// the horizon's problem of `settings` on `model`, its sizes checked
+OcpProblem make_problem(const Model& model, const ControllerSettings& s) {
+  const int n = model.n;
+  auto check_size = [n](const VecX<double>& x, const char* name, bool may_be_empty) {
+    if (x.size() == n || (may_be_empty && x.size() == 0)) return;
+    throw std::invalid_argument(std::string("controller settings: ") + name + " has " + std::to_string(x.size()) +
+                                " entries, the model " + std::to_string(n) + " joints");
+  };
+  check_size(s.q_ref, "q_ref", false);
+  check_size(s.torque_lower, "torque_lower", true);
+  check_size(s.torque_upper, "torque_upper", true);
+  if (s.torque_lower.size() != s.torque_upper.size()) {
+    throw std::invalid_argument("controller settings: torque_lower and torque_upper must both be given or both empty");
+  }
+  OcpWeights w = s.weights;
+  if (w.Qa.size() == 0) w.Qa = VecX<double>::Zero(n);
+  TorqueLimits limits;
+  if (s.limits_in_horizon && s.torque_lower.size() == n &&
+      (s.torque_lower.array().isFinite() || s.torque_upper.array().isFinite()).any()) {
+    limits = TorqueLimits{s.torque_lower, s.torque_upper};
+  }
+  return OcpProblem(model, s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
+}
+
+}  // namespace
+
+Controller::Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings)
+    : Controller(model ? make_problem(settings.horizon_model ? *settings.horizon_model : *model, settings)
+                       : throw std::invalid_argument("controller: no model given"),
+                 settings.cgmres, model) {
+  horizon_model_ = settings.horizon_model ? settings.horizon_model : model;
+  nlp_.set_stage_batching(settings.simd_stages);
+  const int n = this->n();
+  if (settings.torque_lower.size() == n) {
+    if (settings.limits_in_horizon) {
+      set_torque_limits(settings.torque_lower, settings.torque_upper);
+    } else {
+      // the horizon is unconstrained: only the clamp
+      check_and_set_clamp(settings.torque_lower, settings.torque_upper, false);
+    }
+  }
+  set_disturbance_observer(settings.observer_time_constant);
+}
+
+Controller::Controller(OcpProblem problem, const CgmresSettings& settings, std::shared_ptr<const Model> plant_model)
     : nlp_(std::move(problem)),
       solver_(nlp_, settings),
-      plant_model_(plant_model ? *plant_model : nlp_.problem().model()),
-      data_(plant_model_) {
-  if (plant_model_.n != nlp_.n()) {
-    throw std::invalid_argument("the plant model has " + std::to_string(plant_model_.n) + " joints, the problem " +
+      plant_model_(plant_model ? std::move(plant_model) : std::make_shared<const Model>(nlp_.problem().model())),
+      data_(*plant_model_) {
+  if (plant_model_->n != nlp_.n()) {
+    throw std::invalid_argument("the plant model has " + std::to_string(plant_model_->n) + " joints, the problem " +
                                 std::to_string(nlp_.n()));
   }
   const int n = nlp_.n();
@@ -24,25 +70,55 @@ Controller::Controller(OcpProblem problem, const CgmresSettings& settings, const
                  &d_hat_, &a_meas_}) {
     *x = Vec::Zero(n);
   }
+  // the clamp: the horizon's bounds where it has them
   lower_ = Vec::Constant(n, -std::numeric_limits<double>::infinity());
   upper_ = Vec::Constant(n, std::numeric_limits<double>::infinity());
+  const TorqueBounds& b = nlp_.problem().torque_bounds();
+  for (int k = 0; k < b.m(); ++k) {
+    const int j = b.joints()[static_cast<size_t>(k)];
+    lower_[j] = b.middle()[k] - b.half_range()[k];
+    upper_[j] = b.middle()[k] + b.half_range()[k];
+  }
 }
 
-void Controller::set_torque_limits(const Vec& lower, const Vec& upper) {
+void Controller::set_torque_limits(const Vec& lower, const Vec& upper) { check_and_set_clamp(lower, upper, true); }
+
+void Controller::check_and_set_clamp(const Vec& lower, const Vec& upper, bool match_horizon) {
   const int n = this->n();
   if (lower.size() != n || upper.size() != n) {
     throw std::invalid_argument("torque limits have " + std::to_string(lower.size()) + " and " +
                                 std::to_string(upper.size()) + " entries, expected " + std::to_string(n));
   }
+  const Model& model = *plant_model_;
+  auto joint = [&](int j) {
+    return j < static_cast<int>(model.joint_names.size()) ? "'" + model.joint_names[static_cast<size_t>(j)] + "'"
+                                                          : std::to_string(j);
+  };
   for (int j = 0; j < n; ++j) {
     if (std::isnan(lower[j]) || std::isnan(upper[j]) || !(lower[j] < upper[j])) {
-      throw std::invalid_argument("torque limits of joint " + std::to_string(j) + ": expected lower < upper, got [" +
+      throw std::invalid_argument("torque limits of joint " + joint(j) + ": expected lower < upper, got [" +
                                   std::to_string(lower[j]) + ", " + std::to_string(upper[j]) + "]");
+    }
+  }
+  if (match_horizon) {
+    // one set of limits: where the horizon bounds a joint, the clamp is the same range
+    const TorqueBounds& b = nlp_.problem().torque_bounds();
+    for (int k = 0; k < b.m(); ++k) {
+      const int j = b.joints()[static_cast<size_t>(k)];
+      const double lo = b.middle()[k] - b.half_range()[k], hi = b.middle()[k] + b.half_range()[k];
+      const double tol = 1e-12 * std::max(1.0, std::max(std::abs(lo), std::abs(hi)));
+      if (std::abs(lower[j] - lo) > tol || std::abs(upper[j] - hi) > tol) {
+        throw std::invalid_argument("torque limits of joint " + joint(j) + ": [" + std::to_string(lower[j]) + ", " +
+                                    std::to_string(upper[j]) + "] differ from the horizon's bounds [" +
+                                    std::to_string(lo) + ", " + std::to_string(hi) + "]");
+      }
     }
   }
   lower_ = lower;
   upper_ = upper;
 }
+
+void Controller::set_target(const Vec& q_ref) { nlp_.problem().set_target(q_ref); }
 
 void Controller::set_disturbance_observer(double time_constant) {
   if (!(time_constant >= 0) || !std::isfinite(time_constant)) {
@@ -59,7 +135,7 @@ void Controller::observe(In q, In v) {
     // acceleration minus what the plant applied
     a_meas_ = (v - v_prev_) / dt;
     const double beta = std::min(1.0, dt / observer_time_constant_);
-    const Vec& tau_model = rnea(plant_model_, data_, q_prev_, v_prev_, a_meas_);
+    const Vec& tau_model = rnea(*plant_model_, data_, q_prev_, v_prev_, a_meas_);
     for (int j = 0; j < n(); ++j) {
       const double raw = tau_model[j] - tau_last_[j];
       // bounded by what the actuator could counter: a blown-up measurement cannot wind it up
@@ -127,7 +203,7 @@ void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
     // delay-compensated inverse dynamics (paper eqs. 27–28)
     q_pred_ = q + dt * v;
     v_pred_ = v + dt * a0_hat;
-    tau_cmd_ = rnea(plant_model_, data_, q_pred_, v_pred_, U0) - nlp_.problem().disturbance();
+    tau_cmd_ = rnea(*plant_model_, data_, q_pred_, v_pred_, U0) - nlp_.problem().disturbance();
   }
   // the plant never receives a torque its actuator cannot give (a non-finite command is a
   // divergence, reported by update)

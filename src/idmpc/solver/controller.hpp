@@ -16,6 +16,7 @@
 /// with (q⁻, v⁻) the previous measurement and τ⁻ the torque applied over [t − Δt, t) (known from
 /// the timing above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
 
+#include <memory>
 #include <string>
 
 #include "idmpc/model/data.hpp"
@@ -24,15 +25,43 @@
 
 namespace idmpc {
 
+/// @brief Everything a controller is built from, besides its model. Vectors have one entry per
+/// joint; Controller's constructor checks them and names the first bad one.
+struct ControllerSettings {
+  Formulation formulation = Formulation::kInverseDynamics;
+  DerivativeMode derivatives = DerivativeMode::kAdjoint;
+  int N = 25;                 ///< horizon stages
+  CgmresSettings cgmres;      ///< Δt, T_f, α, kmax, ζ, h, shooting scheme, start
+  OcpWeights weights;         ///< Q_q, Q_v, Q_a, R (Q_a may be empty: zero)
+  VecX<double> q_ref;         ///< the target; Controller::set_target changes it between updates
+  /// @brief The actuators' torque range, given once: the horizon's constraints (DESIGN §8) on
+  /// every joint bounded on both sides, and the clamp of every torque the controller returns.
+  /// Empty: unbounded; ±infinity per joint: that joint unbounded.
+  VecX<double> torque_lower, torque_upper;
+  /// @brief false: the limits only clamp the returned torque; the horizon is unconstrained.
+  bool limits_in_horizon = true;
+  double observer_time_constant = 0;  ///< disturbance observer (DESIGN §10); 0: off
+  bool simd_stages = true;            ///< stages in SIMD lanes where independent
+  /// @brief The model of the horizon, when it differs from the plant's (implicit damping over
+  /// the horizon step, smoothed friction); null: the controller's model.
+  std::shared_ptr<const Model> horizon_model;
+};
+
 class Controller {
  public:
   using Vec = VecX<double>;
   using In = Eigen::Ref<const Vec>;
 
-  /// @brief Owns the problem and the solver; throws std::invalid_argument on bad settings.
-  /// `plant_model` (kept by reference) is the model the ID torque rule uses when the problem's
-  /// differs from the plant's (with_implicit_damping); null: the problem's model.
-  Controller(OcpProblem problem, const CgmresSettings& settings, const Model* plant_model = nullptr);
+  /// @brief The controller of `model` (the plant's model: the ID torque rule and the observer
+  /// use it) with `settings`. Shares the models, owns the problem and the solver. Throws
+  /// std::invalid_argument naming the first bad setting.
+  Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings);
+
+  /// @brief From a problem built by hand: owns it and the solver; the returned torques are
+  /// clamped to the problem's torque bounds (set_torque_limits to clamp otherwise). `plant_model`
+  /// is the model of the ID torque rule and the observer; null: the problem's model.
+  Controller(OcpProblem problem, const CgmresSettings& settings,
+             std::shared_ptr<const Model> plant_model = nullptr);
   Controller(const Controller&) = delete;
   Controller& operator=(const Controller&) = delete;
 
@@ -41,6 +70,7 @@ class Controller {
   const OcpProblem& problem() const { return nlp_.problem(); }
   const VecX<double>& q_ref() const { return nlp_.problem().cost().q_ref(); }
   Shooting& nlp() { return nlp_; }
+  const Shooting& nlp() const { return nlp_; }
   const Cgmres& solver() const { return solver_; }
   Cgmres& solver() { return solver_; }
 
@@ -54,9 +84,13 @@ class Controller {
   bool update(double t, In q, In v);
 
   /// @brief Actuator limits: every torque the controller returns lies in [lower, upper]
-  /// (±infinity: unbounded). Throws std::invalid_argument for sizes other than n, NaN, or
-  /// lower > upper.
+  /// (±infinity: unbounded). Throws std::invalid_argument for sizes other than n, NaN,
+  /// lower ≥ upper, or a joint the horizon bounds (OcpProblem's torque limits) with other limits.
   void set_torque_limits(const Vec& lower, const Vec& upper);
+
+  /// @brief A new target q_ref from the next update on (the torque reference ID(q_ref, 0, 0)
+  /// follows). Size n, finite; allocation-free.
+  void set_target(const Vec& q_ref);
   const Vec& torque_lower() const { return lower_; }
   const Vec& torque_upper() const { return upper_; }
 
@@ -88,10 +122,13 @@ class Controller {
   void torque_rule(In q, In v, In a0_hat, double dt);
   // the observer's step from the previous measurement to (q, v)
   void observe(In q, In v);
+  // the clamp [lower, upper], checked; with match_horizon, equal to the horizon's bounds where it has any
+  void check_and_set_clamp(const Vec& lower, const Vec& upper, bool match_horizon);
 
+  std::shared_ptr<const Model> horizon_model_;  ///< the problem's model, kept alive
   Shooting nlp_;
   Cgmres solver_;
-  const Model& plant_model_;  ///< for the ID torque
+  std::shared_ptr<const Model> plant_model_;  ///< for the ID torque and the observer
   Data data_;                 ///< for the ID torque
   Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;
   // observer: time constant (0: off), previous measurement, torques over the last and the

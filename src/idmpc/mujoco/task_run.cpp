@@ -1,0 +1,158 @@
+#include "idmpc/mujoco/task_run.hpp"
+
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace idmpc::mj {
+
+VecX<double> friction_loss(const mjModel* m) {
+  VecX<double> f = VecX<double>::Zero(m->nv);
+  if (m->opt.disableflags & (mjDSBL_FRICTIONLOSS | mjDSBL_CONSTRAINT)) return f;
+  for (int i = 0; i < m->nv; ++i) f[i] = m->dof_frictionloss[i];
+  return f;
+}
+
+namespace {
+
+ImportOptions import_options(const Task& task, const LoadedModel& loaded) {
+  ImportOptions o;
+  o.direct_torque = task.direct_torque;
+  o.actuate_every_joint = task.actuate_every_joint;
+  o.joint_force_lower = loaded.joint_force_lower;
+  o.joint_force_upper = loaded.joint_force_upper;
+  return o;
+}
+
+std::string joint_list(const std::vector<std::string>& names) {
+  std::string list;
+  for (const auto& j : names) list += (list.empty() ? "'" : ", '") + j + "'";
+  return list;
+}
+
+}  // namespace
+
+TaskRun::TaskRun(const Task& task)
+    : task_(task),
+      loaded_(load_model_translated(task.model)),
+      imported_(import_model(loaded_.model.get(), task.model, import_options(task, loaded_))),
+      model_(std::make_shared<const Model>(imported_.model)),
+      resolved_(resolve(task, model_->n)) {
+  const mjModel* m = loaded_.model.get();
+  const int n = model_->n;
+  if (resolved_.q0.size() == 0) resolved_.q0 = keyframe_qpos(m, task.q0_rule, task.model);
+
+  // the actuators' ranges, narrowed by the task's limit: constraints of the horizon (DESIGN §8)
+  // and the clamp of every torque the plant receives
+  lower_ = imported_.actuation.torque_lower.cwiseMax(-resolved_.torque_limit);
+  upper_ = imported_.actuation.torque_upper.cwiseMin(resolved_.torque_limit);
+  for (int j = 0; j < n; ++j) {
+    if (!std::isfinite(lower_[j]) && !std::isfinite(upper_[j])) unbounded_.push_back(model_->joint_names[j]);
+  }
+
+  // the horizon's model (the plant's passive forces, DESIGN §10) and the "auto" weights, the
+  // same for both formulations
+  plant_ = std::make_unique<Plant>(m, imported_.actuation);
+  const std::string timestep_warning = plant_->set_control_period(resolved_.cgmres.dt);
+  setup_ = std::make_unique<const HorizonSetup>(
+      setup_horizon(task, resolved_, *model_, friction_loss(m), lower_, upper_, plant_->timestep()));
+
+  ControllerSettings cs;
+  cs.formulation = resolved_.formulation;
+  cs.derivatives = resolved_.derivatives;
+  cs.N = task.N;
+  cs.cgmres = resolved_.cgmres;
+  cs.weights = setup_->weights;
+  cs.q_ref = resolved_.qref;
+  cs.torque_lower = lower_;
+  cs.torque_upper = upper_;
+  cs.observer_time_constant = task.offset_free ? task.observer_time_constant : 0.0;
+  cs.simd_stages = task.simd_stages;
+  cs.horizon_model = std::make_shared<const Model>(setup_->horizon_model);
+  controller_ = std::make_unique<Controller>(std::make_shared<const Model>(setup_->plant_model), cs);
+
+  // what the run does not model, had to change or chose by itself
+  if (!loaded_.translations.empty()) notices_.push_back(loaded_.notice());
+  notices_.insert(notices_.end(), imported_.notices.begin(), imported_.notices.end());
+  notices_.insert(notices_.end(), setup_->notes.begin(), setup_->notes.end());
+  warnings_ = resolved_.warnings;
+  if (!unbounded_.empty()) {
+    warnings_.push_back("no torque limit is declared for joint(s) " + joint_list(unbounded_) +
+                        ": their torques are unbounded (give --torque-limit or the actuators' forcerange)");
+  }
+  if (!imported_.unmodeled.empty()) {
+    std::string list;
+    for (const auto& f : imported_.unmodeled) list += (list.empty() ? "" : "; ") + f;
+    warnings_.push_back("the plant has features the controller does not model: " + list);
+  }
+  for (const auto& w : range_violations(m, resolved_.q0, "q0")) warnings_.push_back(w);
+  for (const auto& w : range_violations(m, resolved_.qref, "qref")) warnings_.push_back(w);
+  if (!timestep_warning.empty()) warnings_.push_back(timestep_warning);
+}
+
+ClosedLoopSettings TaskRun::loop_settings() const {
+  ClosedLoopSettings ls;
+  ls.duration = task_.duration;
+  ls.q0 = resolved_.q0;
+  ls.v0 = VecX<double>::Zero(n());
+  return ls;
+}
+
+RunResult TaskRun::run(const std::function<void(const StepRecord&)>& on_step) { return run(loop_settings(), on_step); }
+
+RunResult TaskRun::run(const ClosedLoopSettings& settings, const std::function<void(const StepRecord&)>& on_step) {
+  return run_closed_loop(*plant_, *controller_, settings, on_step ? on_step : [](const StepRecord&) {});
+}
+
+RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path) const {
+  const int n = this->n();
+  const Controller& c = *controller_;
+  RunSummary s;
+  s.task = task_;
+  s.n = n;
+  s.simd_stages = c.nlp().stage_batching() ||
+                  (c.problem().costate_lanes() && resolved_.cgmres.shooting == ShootingScheme::kMultiple);
+  s.zeta = c.solver().settings().zeta;
+  s.steps = result.steps;
+  s.diverged = result.diverged;
+  s.diverged_at = result.diverged_at;
+  s.divergence_reason = result.divergence_reason;
+  const auto& ms = result.update_ms;
+  s.mean_update_ms = result.mean_update_ms;
+  s.p50_update_ms = percentile(ms, 50);
+  s.p95_update_ms = percentile(ms, 95);
+  s.max_update_ms = result.updates > 0 ? result.max_update_ms : std::numeric_limits<double>::quiet_NaN();
+  s.rollout_ms = result.mean_phase_ms.rollout;
+  s.costate_ms = result.mean_phase_ms.costate;
+  s.gmres_ms = result.mean_phase_ms.gmres;
+  s.evaluations_per_update = result.evaluations_per_update;
+  s.init_residual = result.init_residual;
+  s.final_q_error = result.final_q_error;
+  s.final_v_norm = result.final_v_norm;
+  s.mean_residual = result.mean_residual;
+  s.unmodeled = imported_.unmodeled;
+  s.notices = notices_;
+  s.warnings = warnings_;
+  s.reached = !s.diverged && s.final_q_error < task_.reach_tolerance;
+  s.contact_steps = result.contact_steps;
+  s.max_contact_force = result.max_contact_force;
+  s.final_disturbance.assign(result.final_disturbance.data(),
+                             result.final_disturbance.data() + result.final_disturbance.size());
+  s.implicit_damping = setup_->implicit_damping;
+  s.friction_velocity.assign(setup_->friction_velocity.data(), setup_->friction_velocity.data() + n);
+  s.Qq.assign(setup_->weights.Qq.data(), setup_->weights.Qq.data() + n);
+  s.Qv.assign(setup_->weights.Qv.data(), setup_->weights.Qv.data() + n);
+  s.R.assign(setup_->weights.R.data(), setup_->weights.R.data() + n);
+  s.unbounded_joints = unbounded_;
+  s.torque_lower.assign(lower_.data(), lower_.data() + n);
+  s.torque_upper.assign(upper_.data(), upper_.data() + n);
+  s.saturated_steps = result.saturated_steps;
+  s.saturated_any = result.saturated_any;
+  s.max_constraint_violation = result.max_constraint_violation;
+  if (s.diverged) s.divergence_hint = divergence_hint(task_, setup_->damping_step_ratio);
+  s.model_hash = file_hash(task_.model);  // render checks a log's model and summary by these
+  s.log_hash = file_hash(log_path);
+  return s;
+}
+
+}  // namespace idmpc::mj

@@ -1,0 +1,94 @@
+#pragma once
+/// @file task_run.hpp
+/// @brief A task on its MuJoCo model, ready to run: the one place where a task file becomes a
+/// plant and a controller. The command line, the tests, the benchmarks, the Python module and
+/// users' own loops build their runs here.
+///
+///     idmpc::mj::TaskRun run(idmpc::load_task("my_reach.json"));
+///     idmpc::Controller& c = run.controller();   // or run.run() for the whole closed loop
+///     c.initialize(q, v);                         // torque for the first period: c.torque()
+///     c.update(t, q, v);                          // every Δt = c.dt(); false: diverged
+///
+/// What the run does with the model (translations of newer MJCF, servos replaced by torques,
+/// the horizon's passive forces and automatic weights, limits) is said in notices(); settings
+/// accepted without effect and risks in warnings(). Both are ready before anything runs.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "idmpc/experiment/horizon_setup.hpp"
+#include "idmpc/experiment/run_record.hpp"
+#include "idmpc/mujoco/closed_loop.hpp"
+#include "idmpc/mujoco/import.hpp"
+#include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/plant.hpp"
+#include "idmpc/solver/controller.hpp"
+
+namespace idmpc::mj {
+
+class TaskRun {
+ public:
+  /// @brief Loads the task's model (MJCF of MuJoCo 2.2 or newer, URDF), imports it, resolves
+  /// the task on it and builds the plant and the controller. Throws std::invalid_argument (bad
+  /// task values, unsupported model features) or std::runtime_error (unreadable files), with a
+  /// one-line message naming the file, field or joint.
+  explicit TaskRun(const Task& task);
+  TaskRun(const TaskRun&) = delete;
+  TaskRun& operator=(const TaskRun&) = delete;
+
+  const Task& task() const { return task_; }
+  /// @brief The task made concrete on the model (q0 filled in from the keyframe if asked).
+  const ResolvedTask& resolved() const { return resolved_; }
+  const mjModel* mj_model() const { return loaded_.model.get(); }
+  /// @brief The imported rigid-body model (no friction; the plant's joints).
+  const Model& model() const { return *model_; }
+  std::shared_ptr<const Model> shared_model() const { return model_; }
+  const ImportedModel& imported() const { return imported_; }
+  /// @brief The horizon's model, weights and automatic choices (HorizonSetup).
+  const HorizonSetup& horizon() const { return *setup_; }
+  Controller& controller() { return *controller_; }
+  const Controller& controller() const { return *controller_; }
+  /// @brief The MuJoCo plant, its control period set to the controller's Δt.
+  Plant& plant() { return *plant_; }
+  int n() const { return model_->n; }
+  const VecX<double>& q0() const { return resolved_.q0; }
+  /// @brief The actuators' range narrowed by the task's torque_limit (±infinity: unbounded):
+  /// the horizon's constraints and the clamp of every torque the plant receives.
+  const VecX<double>& torque_lower() const { return lower_; }
+  const VecX<double>& torque_upper() const { return upper_; }
+  /// @brief Joints without a torque bound on either side, by name.
+  const std::vector<std::string>& unbounded_joints() const { return unbounded_; }
+  const std::vector<std::string>& notices() const { return notices_; }
+  const std::vector<std::string>& warnings() const { return warnings_; }
+
+  /// @brief The closed loop of the task: from (q0, 0) for task().duration, on_step called for
+  /// every control step. A divergence is recorded in the result, never thrown.
+  RunResult run(const std::function<void(const StepRecord&)>& on_step = {});
+  /// @brief The same with other loop settings (start, duration, timing; loop_settings() gives
+  /// the task's).
+  RunResult run(const ClosedLoopSettings& settings, const std::function<void(const StepRecord&)>& on_step = {});
+  ClosedLoopSettings loop_settings() const;
+
+  /// @brief The run's summary (the JSON of `swingup --summary`): the task, what was chosen,
+  /// timings and outcome. `log_path`: the run's CSV log, hashed for `render` (empty: none).
+  RunSummary summary(const RunResult& result, const std::string& log_path = "") const;
+
+ private:
+  Task task_;
+  LoadedModel loaded_;
+  ImportedModel imported_;
+  std::shared_ptr<const Model> model_;
+  ResolvedTask resolved_;
+  VecX<double> lower_, upper_;
+  std::unique_ptr<Plant> plant_;
+  std::unique_ptr<const HorizonSetup> setup_;
+  std::unique_ptr<Controller> controller_;
+  std::vector<std::string> unbounded_, notices_, warnings_;
+};
+
+/// @brief MuJoCo's friction loss per dof (zero where the model disables it).
+VecX<double> friction_loss(const mjModel* m);
+
+}  // namespace idmpc::mj
