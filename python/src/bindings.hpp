@@ -16,6 +16,8 @@ namespace py = pybind11;
 void bind_model(py::module_& m);
 /// Task, load_task, paper_task, arm_defaults, task_from_dict
 void bind_task(py::module_& m);
+/// ControllerSettings, Controller, Plant, TaskRun, run_task
+void bind_control(py::module_& m);
 
 /// @brief Throws std::invalid_argument (ValueError) unless the vector `name` has n entries:
 /// "<name> has <size> entries, expected n = <n>".

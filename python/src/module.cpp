@@ -35,4 +35,5 @@ PYBIND11_MODULE(idmpc, m) {
   m.attr("mujoco_version") = mj_versionString();
   idmpc::python::bind_model(m);
   idmpc::python::bind_task(m);
+  idmpc::python::bind_control(m);
 }
