@@ -1,6 +1,9 @@
 """The controller and the closed loop: a task's run and its record, a loop written in Python
 with the plant and the controller that gives the same run, and the errors of bad tasks."""
 
+import gc
+import threading
+
 import numpy as np
 import pytest
 
@@ -139,6 +142,41 @@ def test_run_after_a_python_loop_starts_afresh():
     again = run.run()
     np.testing.assert_array_equal(again["q"], expected["q"])
     assert again["summary"]["final_q_error"] == expected["summary"]["final_q_error"]
+
+
+def test_controller_and_plant_keep_their_run_alive():
+    controller = idmpc.TaskRun(short_paper_task()).controller
+    plant = idmpc.TaskRun(short_paper_task()).plant
+    gc.collect()
+    plant.reset([-np.pi, 0, 0, 0], np.zeros(4))
+    tau = controller.initialize(plant.q(), plant.v())
+    assert plant.step(tau) == (True, "")
+    assert plant.time() == pytest.approx(controller.dt())
+
+
+def test_runs_in_threads_equal_the_serial_run():
+    task = short_paper_task()
+    expected = idmpc.run_task(task)
+    records = [None, None]
+
+    def run(i):
+        records[i] = idmpc.run_task(task)
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in records:
+        np.testing.assert_array_equal(r["q"], expected["q"])
+        np.testing.assert_array_equal(r["u"], expected["u"])
+
+
+def test_controller_settings_defaults_are_the_cpp_defaults():
+    s = idmpc.ControllerSettings()
+    assert (s.formulation, s.derivatives, s.N) == ("id", "adjoint", 25)
+    assert (s.cgmres.kmax, s.cgmres.Tf, s.cgmres.dt, s.cgmres.shooting) == (10, 0.5, 1e-3, "single")
+    assert s.q_ref.shape == (0,) and s.horizon_model is None and s.limits_in_horizon
 
 
 def test_controller_from_settings():
