@@ -20,8 +20,7 @@
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
 #include "app/swingup.hpp"
-#include "idmpc/mujoco/import.hpp"
-#include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc::app {
 namespace {
@@ -164,15 +163,7 @@ Task checked_arm_task(const SweepOptions& opt, const std::string& file) {
   const std::string path = cell_file(opt, Cell{kArmsTable, file, "", "", "", 0, 0, 0, "", false});
   try {
     Task task = load_task(path);
-    const mj::LoadedModel loaded = mj::load_model_translated(task.model);
-    mj::ImportOptions options;
-    options.direct_torque = task.direct_torque;
-    options.actuate_every_joint = task.actuate_every_joint;
-    options.joint_force_lower = loaded.joint_force_lower;
-    options.joint_force_upper = loaded.joint_force_upper;
-    const mj::ImportedModel imported = mj::import_model(loaded.model.get(), task.model, options);
-    const ResolvedTask r = resolve(task, imported.model.n);
-    if (r.q0.size() == 0) mj::keyframe_qpos(loaded.model.get(), task.q0_rule, task.model);
+    const mj::TaskRun run(task);
     return task;
   } catch (const std::exception& e) {
     throw std::invalid_argument("'" + arms_list(opt) + "' lists '" + file + "', which cannot run: " + e.what());

@@ -978,7 +978,7 @@ TEST_F(Cli, HelpAndVersionExitZero) {
   EXPECT_TRUE(std::regex_search(v.out, std::regex("^idmpc [0-9.]+ \\(MuJoCo [0-9.]+\\)\n$"))) << v.out;
 }
 
-// the README's synopsis and each command's --help list the same options
+// the synopsis of docs/cli.md and each command's --help list the same options
 class CliSynopsis : public Cli, public ::testing::WithParamInterface<std::string> {};
 
 std::set<std::string> long_options(const std::string& text) {
@@ -1003,16 +1003,16 @@ std::set<std::string> help_options(const std::string& help) {
   return names;
 }
 
-// the options of `idmpc <command> ...` in the README's synopsis (the sh block of "## Command line")
-std::set<std::string> readme_options(const std::string& command) {
-  const std::string readme = slurp(IDMPC_SOURCE_DIR "/README.md");
-  const std::size_t section = readme.find("\n## Command line");
-  const std::size_t block = readme.find("```sh\n", section);
-  const std::size_t block_end = readme.find("```", block + 6);
+// the options of `idmpc <command> ...` in the synopsis of docs/cli.md (the sh block of "## Synopsis")
+std::set<std::string> synopsis_options(const std::string& command) {
+  const std::string synopsis_doc = slurp(IDMPC_SOURCE_DIR "/docs/cli.md");
+  const std::size_t section = synopsis_doc.find("\n## Synopsis");
+  const std::size_t block = synopsis_doc.find("```sh\n", section);
+  const std::size_t block_end = synopsis_doc.find("```", block + 6);
   if (section == std::string::npos || block == std::string::npos || block_end == std::string::npos) return {};
   std::string synopsis;
   bool in_command = false;
-  for (const std::string& line : lines_of(readme.substr(block + 6, block_end - block - 6))) {
+  for (const std::string& line : lines_of(synopsis_doc.substr(block + 6, block_end - block - 6))) {
     if (line.rfind("idmpc ", 0) == 0) in_command = line.rfind("idmpc " + command + " ", 0) == 0 || line == "idmpc " + command;
     if (in_command) synopsis += line + "\n";
   }
@@ -1030,13 +1030,13 @@ TEST_P(CliSynopsis, ListsTheOptionsOfTheHelp) {
   const Result r = idmpc(command + " --help");
   ASSERT_EQ(r.code, 0) << r.err;
   const std::set<std::string> help = help_options(r.out);
-  const std::set<std::string> readme = readme_options(command);
+  const std::set<std::string> documented = synopsis_options(command);
   ASSERT_FALSE(help.empty()) << r.out;
   std::set<std::string> missing, extra;
-  std::set_difference(help.begin(), help.end(), readme.begin(), readme.end(), std::inserter(missing, missing.end()));
-  std::set_difference(readme.begin(), readme.end(), help.begin(), help.end(), std::inserter(extra, extra.end()));
-  EXPECT_TRUE(missing.empty()) << "README synopsis of 'idmpc " << command << "' lacks: " << joined(missing);
-  EXPECT_TRUE(extra.empty()) << "README synopsis of 'idmpc " << command << "' has options --help does not: " << joined(extra);
+  std::set_difference(help.begin(), help.end(), documented.begin(), documented.end(), std::inserter(missing, missing.end()));
+  std::set_difference(documented.begin(), documented.end(), help.begin(), help.end(), std::inserter(extra, extra.end()));
+  EXPECT_TRUE(missing.empty()) << "docs/cli.md synopsis of 'idmpc " << command << "' lacks: " << joined(missing);
+  EXPECT_TRUE(extra.empty()) << "docs/cli.md synopsis of 'idmpc " << command << "' has options --help does not: " << joined(extra);
 }
 
 INSTANTIATE_TEST_SUITE_P(Commands, CliSynopsis, ::testing::Values("check", "dynamics", "swingup", "sweep", "render"));

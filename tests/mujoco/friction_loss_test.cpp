@@ -11,9 +11,7 @@
 #include <string>
 
 #include "idmpc/dynamics/rnea.hpp"
-#include "idmpc/experiment/horizon_setup.hpp"
-#include "idmpc/mujoco/import.hpp"
-#include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc {
 namespace {
@@ -30,18 +28,16 @@ double mujoco_friction(mjModel* m, mjData* d, int key, int j, double v) {
 
 TEST(FrictionLoss, SmoothModelMatchesMujocosSlidingFrictionAndIsSaidWhereItDoesNot) {
   const std::string path = std::string(IDMPC_SOURCE_DIR) + "/mjcf/fr3.xml";
+  // the horizon's friction as `swingup` sets it up for the shipped reach task
+  const mj::TaskRun run(load_task(std::string(IDMPC_SOURCE_DIR) + "/mjcf/fr3_reach.json"));
+  ASSERT_EQ(run.task().model, path);
+  const HorizonSetup& setup = run.horizon();
+  const Model& model = run.model();
+  const int n = model.n;
+  const VecX<double>& q0 = run.q0();
   mj::LoadedModel loaded = mj::load_model_translated(path);
   mjModel* m = loaded.model.get();
-  const mj::ImportedModel imported = mj::import_model(m, path);
-  const int n = imported.model.n;
-  // the horizon's friction as `swingup` sets it up for the shipped reach task
-  const Task task = load_task(std::string(IDMPC_SOURCE_DIR) + "/mjcf/fr3_reach.json");
-  ResolvedTask r = resolve(task, n);
-  r.q0 = mj::keyframe_qpos(m, "home", path);
-  VecX<double> f(n);
-  for (int j = 0; j < n; ++j) f[j] = m->dof_frictionloss[j];
-  const HorizonSetup setup = setup_horizon(task, r, imported.model, f, imported.actuation.torque_lower,
-                                           imported.actuation.torque_upper, m->opt.timestep);
+  const VecX<double> f = mj::friction_loss(m);
   ASSERT_TRUE((f.array() > 0).all());
 
   m->opt.disableflags |= mjDSBL_CONTACT | mjDSBL_LIMIT | mjDSBL_GRAVITY | mjDSBL_ACTUATION | mjDSBL_PASSIVE;
@@ -49,13 +45,13 @@ TEST(FrictionLoss, SmoothModelMatchesMujocosSlidingFrictionAndIsSaidWhereItDoesN
   const int key = mj_name2id(m, mjOBJ_KEY, "home");
   ASSERT_GE(key, 0);
   // ours: what the friction adds to our RNEA at (q0, v, 0)
-  const Model with = with_joint_friction(imported.model, f, setup.friction_velocity);
-  Data data_with(with), data_without(imported.model);
+  const Model with = with_joint_friction(model, f, setup.friction_velocity);
+  Data data_with(with), data_without(model);
   const VecX<double> zero = VecX<double>::Zero(n);
   auto our_friction = [&](int j, double v) {
     VecX<double> vel = zero;
     vel[j] = v;
-    return rnea(with, data_with, r.q0, vel, zero)[j] - rnea(imported.model, data_without, r.q0, vel, zero)[j];
+    return rnea(with, data_with, q0, vel, zero)[j] - rnea(model, data_without, q0, vel, zero)[j];
   };
   std::printf("joint  f [N m]  eps [rad/s]   |tau|/f at v [rad/s] = 0.001 0.01 0.03 0.1 0.3 1 (MuJoCo / tanh)\n");
   for (int j = 0; j < n; ++j) {

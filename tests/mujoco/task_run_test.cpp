@@ -1,0 +1,153 @@
+// The public entry points: a controller built from a model and settings (limits given once, the
+// models shared, the target settable between updates) and mj::TaskRun, which makes a task file a
+// plant and a controller exactly as `idmpc swingup` runs it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+#include "idmpc/mujoco/task_run.hpp"
+#include "support/problems.hpp"
+
+namespace idmpc {
+namespace {
+
+const std::string kArm4 = IDMPC_SOURCE_DIR "/mjcf/arm4.xml";
+
+ControllerSettings arm4_settings(int n) {
+  ControllerSettings s;
+  s.weights = test::paper_weights(n);
+  s.q_ref = VecX<double>::Zero(n);
+  s.cgmres.alpha = 0;  // a full horizon from the start
+  s.cgmres.init_full_horizon = true;
+  return s;
+}
+
+// the model given to the controller may go out of scope: the controller shares it (the
+// sanitizer build sees a dangling one)
+TEST(ControllerSettings, TheControllerSharesItsModel) {
+  std::unique_ptr<Controller> c;
+  {
+    auto model = std::make_shared<const Model>(test::load_problem(kArm4).model);
+    c = std::make_unique<Controller>(model, arm4_settings(4));
+  }
+  const VecX<double> q = VecX<double>::Constant(4, 0.05), v = VecX<double>::Zero(4);
+  c->initialize(q, v);
+  ASSERT_EQ(c->failure(), "");
+  EXPECT_TRUE(c->update(1e-3, q, v)) << c->failure();
+  EXPECT_TRUE(c->torque().allFinite());
+}
+
+// one set of limits: the horizon's constraints on every bounded joint and the clamp of the
+// returned torque; a clamp that differs from the horizon's bounds is refused, naming the joint
+TEST(ControllerSettings, LimitsAreGivenOnceForTheHorizonAndTheClamp) {
+  auto model = std::make_shared<const Model>(test::load_problem(kArm4).model);
+  ControllerSettings s = arm4_settings(4);
+  s.torque_lower = VecX<double>::Constant(4, -20);
+  s.torque_upper = VecX<double>::Constant(4, 20);
+  s.torque_upper[3] = std::numeric_limits<double>::infinity();
+  s.torque_lower[3] = -std::numeric_limits<double>::infinity();
+  Controller c(model, s);
+  EXPECT_EQ(c.problem().m(), 3) << "joints 0-2 bounded, joint 3 not";
+  EXPECT_EQ(c.torque_lower(), s.torque_lower);
+  EXPECT_EQ(c.torque_upper(), s.torque_upper);
+  VecX<double> other = s.torque_upper;
+  other[1] = 30;
+  try {
+    c.set_torque_limits(s.torque_lower, other);
+    FAIL() << "a clamp other than the horizon's bounds was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("joint 'joint1'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("horizon"), std::string::npos) << e.what();
+  }
+  // the unconstrained horizon keeps the clamp only
+  s.limits_in_horizon = false;
+  Controller clamp_only(model, s);
+  EXPECT_EQ(clamp_only.problem().m(), 0);
+  EXPECT_EQ(clamp_only.torque_upper(), s.torque_upper);
+  // sizes are checked by name
+  s.q_ref = VecX<double>::Zero(3);
+  EXPECT_THROW(
+      {
+        try {
+          Controller bad(model, s);
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("q_ref has 3 entries"), std::string::npos) << e.what();
+          throw;
+        }
+      },
+      std::invalid_argument);
+}
+
+// the target moves between updates: the arm, held at the first target, goes to the second
+TEST(ControllerSettings, TheTargetChangesBetweenUpdates) {
+  Task task = paper_task();
+  task.model = kArm4;
+  task.q0.assign(4, 0.0);
+  task.q0_rule.clear();
+  task.alpha = 0;
+  task.init_full_horizon = true;
+  mj::TaskRun run(task);
+  Controller& c = run.controller();
+  mj::Plant& plant = run.plant();
+  VecX<double> target = VecX<double>::Zero(4);
+  plant.reset(target, VecX<double>::Zero(4));
+  std::string reason;
+  c.initialize(plant.q(), plant.v());
+  const VecX<double> second = (VecX<double>(4) << 0.3, -0.2, 0.1, 0.2).finished();
+  const int steps = static_cast<int>(std::lround(2.5 / c.dt()));
+  for (int k = 0; k < steps; ++k) {
+    ASSERT_TRUE(plant.step(c.torque(), &reason)) << reason;
+    if (k == 500) {
+      EXPECT_LT(plant.q().cwiseAbs().maxCoeff(), 1e-3) << "held at the first target";
+      c.set_target(second);
+      EXPECT_EQ(c.q_ref(), second);
+    }
+    ASSERT_TRUE(c.update((k + 1) * c.dt(), plant.q(), plant.v())) << c.failure();
+  }
+  EXPECT_LT((plant.q() - second).cwiseAbs().maxCoeff(), 2e-2) << "at the second target";
+  EXPECT_THROW(c.set_target(VecX<double>::Zero(3)), std::invalid_argument);
+  VecX<double> nan_target = second;
+  nan_target[2] = std::nan("");
+  EXPECT_THROW(c.set_target(nan_target), std::invalid_argument);
+}
+
+// a task file becomes the same run as `idmpc swingup` makes of it: what it changed and chose is
+// said before it runs; bad values name their field
+TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
+  Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/fr3_reach.json");
+  task.duration = 0.05;
+  mj::TaskRun run(task);
+  EXPECT_EQ(run.n(), 7);
+  bool servos = false, auto_weights = false;
+  for (const auto& s : run.notices()) {
+    servos = servos || s.find("servos") != std::string::npos;
+    auto_weights = auto_weights || s.find("weights \"auto\"") != std::string::npos;
+  }
+  EXPECT_TRUE(servos && auto_weights);
+  EXPECT_EQ(run.horizon().weights.R.size(), 7);
+  EXPECT_GT(run.controller().disturbance_observer(), 0) << "offset-free by default on real arms";
+  EXPECT_EQ(run.controller().problem().m(), 7);
+  int rows = 0;
+  const mj::RunResult r = run.run([&](const mj::StepRecord&) { ++rows; });
+  EXPECT_FALSE(r.diverged) << r.divergence_reason;
+  EXPECT_EQ(rows, r.steps);
+  EXPECT_EQ(r.steps, 50);
+  const RunSummary s = run.summary(r);
+  EXPECT_EQ(s.steps, r.steps);
+  EXPECT_EQ(s.final_q_error, r.final_q_error);
+  EXPECT_EQ(s.R.size(), 7u);
+
+  task.qref = {0.1, 0.2};
+  try {
+    mj::TaskRun bad(task);
+    FAIL() << "a qref of 2 values on 7 joints was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("qref"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace idmpc
