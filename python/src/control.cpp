@@ -139,6 +139,7 @@ void bind_control(py::module_& m) {
           [](Controller& c, const Vector& q, const Vector& v) -> Vector {
             check_size("initialize: q", q.size(), c.n());
             check_size("initialize: v", v.size(), c.n());
+            py::gil_scoped_release release;  // a full-horizon start may take seconds
             return c.initialize(q, v);
           },
           py::arg("q"), py::arg("v"),
@@ -208,7 +209,8 @@ void bind_control(py::module_& m) {
                           "A task on its MuJoCo model, ready to run: the plant and the controller built as the "
                           "command line builds them. Not thread-safe: one thread per TaskRun.")
       .def(py::init<const Task&>(), py::arg("task"))
-      .def_property_readonly("task", &mj::TaskRun::task)
+      .def_property_readonly(
+          "task", [](const mj::TaskRun& r) { return r.task(); }, "a copy of the task it runs")
       .def_property_readonly("controller", py::overload_cast<>(&mj::TaskRun::controller),
                              py::return_value_policy::reference_internal)
       .def_property_readonly("plant", &mj::TaskRun::plant, py::return_value_policy::reference_internal)

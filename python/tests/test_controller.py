@@ -69,6 +69,8 @@ def test_task_run_accessors():
     assert run.torque_lower.shape == run.torque_upper.shape == (4,)
     assert isinstance(run.notices, list) and isinstance(run.warnings, list)
     assert run.task.duration == DURATION
+    run.task.duration = 5.0  # a copy: the run keeps its task
+    assert run.task.duration == DURATION
 
 
 def python_loop(run):
