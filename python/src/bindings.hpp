@@ -1,0 +1,33 @@
+#pragma once
+/// @file bindings.hpp
+/// @brief The parts of the Python module idmpc, one function per C++ layer they bind.
+
+#include <string>
+
+#include <pybind11/pybind11.h>
+
+#include "idmpc/spatial/spatial.hpp"
+
+namespace idmpc::python {
+
+namespace py = pybind11;
+
+/// Model, load_model and the dynamics kernels (rnea, aba, crba and their derivatives)
+void bind_model(py::module_& m);
+/// Task, load_task, paper_task, arm_defaults, task_from_dict
+void bind_task(py::module_& m);
+/// ControllerSettings, Controller, Plant, TaskRun, run_task
+void bind_control(py::module_& m);
+
+/// @brief Throws std::invalid_argument (ValueError) unless the vector `name` has n entries:
+/// "<name> has <size> entries, expected n = <n>".
+void check_size(const char* name, Eigen::Index size, int n);
+
+/// @brief A JSON text as a Python object, through Python's json module (exact: both sides
+/// read and write the same text).
+py::object json_loads(const std::string& text);
+/// @brief A Python object (dict, list, numbers, strings; numpy arrays and scalars as their
+/// tolist()) as JSON text; non-finite floats raise ValueError as in Python's json module.
+std::string json_dumps(const py::handle& obj);
+
+}  // namespace idmpc::python

@@ -1,0 +1,236 @@
+// The controller, the MuJoCo plant and a task's closed loop (TaskRun). run() collects the
+// per-step records in C++ with the GIL released and converts them to numpy arrays once.
+
+#include <cstring>
+#include <memory>
+#include <vector>
+
+#include <pybind11/eigen.h>
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "bindings.hpp"
+#include "idmpc/mujoco/task_run.hpp"
+
+namespace idmpc::python {
+namespace {
+
+using Vector = VecX<double>;
+
+// the per-step rows of a run, as the closed loop hands them over
+struct Rows {
+  int n = 0;
+  std::vector<double> t, q, v, u, u_commanded, residual, update_ms;
+
+  void add(const mj::StepRecord& s) {
+    t.push_back(s.t);
+    q.insert(q.end(), s.q.data(), s.q.data() + n);
+    v.insert(v.end(), s.v.data(), s.v.data() + n);
+    u.insert(u.end(), s.u.data(), s.u.data() + n);
+    u_commanded.insert(u_commanded.end(), s.u_commanded.data(), s.u_commanded.data() + n);
+    residual.push_back(s.residual);
+    update_ms.push_back(s.update_ms);
+  }
+};
+
+// steps × columns (columns = 0: a vector of length steps), C order
+py::array_t<double> to_array(const std::vector<double>& x, size_t columns = 0) {
+  const auto steps = static_cast<py::ssize_t>(columns ? x.size() / columns : x.size());
+  py::array_t<double> a = columns ? py::array_t<double>({steps, static_cast<py::ssize_t>(columns)})
+                                  : py::array_t<double>(steps);
+  if (!x.empty()) std::memcpy(a.mutable_data(), x.data(), x.size() * sizeof(double));
+  return a;
+}
+
+py::dict run_task_run(mj::TaskRun& run) {
+  Rows rows;
+  rows.n = run.n();
+  mj::RunResult result;
+  RunSummary summary;
+  {
+    py::gil_scoped_release release;
+    result = run.run([&rows](const mj::StepRecord& s) { rows.add(s); });
+    summary = run.summary(result);
+  }
+  const auto n = static_cast<size_t>(rows.n);
+  py::dict d;
+  d["t"] = to_array(rows.t);
+  d["q"] = to_array(rows.q, n);
+  d["v"] = to_array(rows.v, n);
+  d["u"] = to_array(rows.u, n);
+  d["u_commanded"] = to_array(rows.u_commanded, n);
+  d["residual"] = to_array(rows.residual);
+  d["update_ms"] = to_array(rows.update_ms);
+  d["updates"] = result.updates;
+  d["summary"] = json_loads(to_json(summary).dump());
+  return d;
+}
+
+std::shared_ptr<Model> mutable_model(std::shared_ptr<const Model> model) {
+  // Model's members are all const: the Python object may share it without a copy
+  return std::const_pointer_cast<Model>(std::move(model));
+}
+
+}  // namespace
+
+void bind_control(py::module_& m) {
+  py::class_<CgmresSettings>(m, "CgmresSettings", "C/GMRES settings (the task file's \"cgmres\" object).")
+      .def(py::init<>())
+      .def_readwrite("kmax", &CgmresSettings::kmax, "GMRES iterations per update")
+      .def_property(
+          "shooting", [](const CgmresSettings& s) { return to_string(s.shooting); },
+          [](CgmresSettings& s, const std::string& x) { s.shooting = parse_shooting(x); }, "\"single\" or \"multiple\"")
+      .def_readwrite("Tf", &CgmresSettings::Tf, "horizon length T_f [s]")
+      .def_readwrite("alpha", &CgmresSettings::alpha, "horizon growth rate: T(t) = T_f (1 - exp(-alpha t))")
+      .def_readwrite("dt", &CgmresSettings::dt, "sampling period [s]")
+      .def_readwrite("zeta", &CgmresSettings::zeta, "stabilization; 0 means 1/dt")
+      .def_readwrite("h", &CgmresSettings::h, "forward-difference increment")
+      .def_readwrite("init_iterations", &CgmresSettings::init_iterations)
+      .def_readwrite("init_tolerance", &CgmresSettings::init_tolerance)
+      .def_readwrite("init_full_horizon", &CgmresSettings::init_full_horizon)
+      .def("validate", &CgmresSettings::validate, "Raises ValueError naming the first bad setting.");
+
+  py::class_<OcpWeights>(m, "OcpWeights", "Weights of the stage cost: Qq, Qv, Qa, R (one per joint; Qa may be empty).")
+      .def(py::init<>())
+      .def_readwrite("Qq", &OcpWeights::Qq)
+      .def_readwrite("Qv", &OcpWeights::Qv)
+      .def_readwrite("Qa", &OcpWeights::Qa)
+      .def_readwrite("R", &OcpWeights::R);
+
+  py::class_<ControllerSettings>(m, "ControllerSettings",
+                                 "Everything a Controller is built from besides its model; vectors have one entry "
+                                 "per joint, checked by the Controller's constructor.")
+      .def(py::init<>())
+      .def_property(
+          "formulation", [](const ControllerSettings& s) { return to_string(s.formulation); },
+          [](ControllerSettings& s, const std::string& x) { s.formulation = parse_formulation(x); }, "\"fd\" or \"id\"")
+      .def_property(
+          "derivatives", [](const ControllerSettings& s) { return to_string(s.derivatives); },
+          [](ControllerSettings& s, const std::string& x) { s.derivatives = parse_derivative_mode(x); },
+          "\"matrix\" or \"adjoint\"")
+      .def_readwrite("N", &ControllerSettings::N, "horizon stages")
+      .def_readwrite("cgmres", &ControllerSettings::cgmres)
+      .def_readwrite("weights", &ControllerSettings::weights)
+      .def_readwrite("q_ref", &ControllerSettings::q_ref)
+      .def_readwrite("torque_lower", &ControllerSettings::torque_lower, "empty: unbounded; -inf per joint: unbounded")
+      .def_readwrite("torque_upper", &ControllerSettings::torque_upper, "empty: unbounded; +inf per joint: unbounded")
+      .def_readwrite("limits_in_horizon", &ControllerSettings::limits_in_horizon,
+                     "false: the limits only clamp the returned torque")
+      .def_readwrite("observer_time_constant", &ControllerSettings::observer_time_constant,
+                     "disturbance observer [s]; 0: off")
+      .def_readwrite("simd_stages", &ControllerSettings::simd_stages)
+      .def_property(
+          "horizon_model", [](const ControllerSettings& s) { return mutable_model(s.horizon_model); },
+          [](ControllerSettings& s, std::shared_ptr<Model> model) { s.horizon_model = std::move(model); },
+          "the horizon's model when it differs from the controller's; None: the controller's");
+
+  py::class_<Controller>(m, "Controller",
+                         "The NMPC controller: the problem (FD or ID formulation), C/GMRES and the torque rule. "
+                         "initialize(q, v) once, then update(t, q, v) every dt(); torque() is what to apply next.")
+      .def(py::init([](std::shared_ptr<Model> model, const ControllerSettings& settings) {
+             return std::make_unique<Controller>(std::move(model), settings);
+           }),
+           py::arg("model"), py::arg("settings"))
+      .def("n", &Controller::n)
+      .def("dt", &Controller::dt)
+      .def(
+          "initialize",
+          [](Controller& c, const Vector& q, const Vector& v) -> Vector {
+            check_size("initialize: q", q.size(), c.n());
+            check_size("initialize: v", v.size(), c.n());
+            py::gil_scoped_release release;  // a full-horizon start may take seconds
+            return c.initialize(q, v);
+          },
+          py::arg("q"), py::arg("v"),
+          "Zero-horizon initialization from the measured state; returns the torque for the first period.")
+      .def(
+          "update",
+          [](Controller& c, double t, const Vector& q, const Vector& v) {
+            check_size("update: q", q.size(), c.n());
+            check_size("update: v", v.size(), c.n());
+            py::gil_scoped_release release;
+            return c.update(t, q, v);
+          },
+          py::arg("t"), py::arg("q"), py::arg("v"),
+          "One control update at time t; True and torque() for the next period, or False and failure().")
+      .def("torque", [](const Controller& c) -> Vector { return c.torque(); }, "the torque to apply (within the limits)")
+      .def("commanded_torque", [](const Controller& c) -> Vector { return c.commanded_torque(); },
+           "the torque before clamping to the limits")
+      .def("failure", &Controller::failure, "why the last initialize/update failed, or \"\"")
+      .def("residual_norm", &Controller::residual_norm)
+      .def("constraint_violation", &Controller::constraint_violation)
+      .def("disturbance", [](const Controller& c) -> Vector { return c.disturbance(); },
+           "the observer's estimate of the unmodeled joint torque")
+      .def("applied_acceleration", [](const Controller& c) -> Vector { return c.applied_acceleration(); })
+      .def("q_ref", [](const Controller& c) -> Vector { return c.q_ref(); })
+      .def(
+          "set_target",
+          [](Controller& c, const Vector& q_ref) {
+            check_size("set_target: q_ref", q_ref.size(), c.n());
+            c.set_target(q_ref);
+          },
+          py::arg("q_ref"), "A new target from the next update on.")
+      .def("set_torque_limits", &Controller::set_torque_limits, py::arg("lower"), py::arg("upper"))
+      .def("torque_lower", [](const Controller& c) -> Vector { return c.torque_lower(); })
+      .def("torque_upper", [](const Controller& c) -> Vector { return c.torque_upper(); })
+      .def("set_disturbance_observer", &Controller::set_disturbance_observer, py::arg("time_constant"));
+
+  py::class_<mj::Plant>(m, "Plant", "The MuJoCo simulation the controller drives, one control period per step.")
+      .def("nv", &mj::Plant::nv)
+      .def("timestep", &mj::Plant::timestep, "MuJoCo's timestep [s]")
+      .def("substeps", &mj::Plant::substeps, "MuJoCo steps per control period")
+      .def("set_control_period", &mj::Plant::set_control_period, py::arg("dt"),
+           "Sets the control period; returns a warning if the timestep had to change, else \"\".")
+      .def(
+          "reset",
+          [](mj::Plant& p, const Vector& q, const Vector& v) {
+            check_size("reset: q", q.size(), p.nv());
+            check_size("reset: v", v.size(), p.nv());
+            p.reset(q, v);
+          },
+          py::arg("q"), py::arg("v"))
+      .def(
+          "step",
+          [](mj::Plant& p, const Vector& tau) {
+            check_size("step: tau", tau.size(), p.nv());
+            std::string reason;
+            const bool ok = p.step(tau, &reason);
+            return std::make_pair(ok, reason);
+          },
+          py::arg("tau"), "Applies tau for one control period: (True, \"\"), or (False, why the simulation failed).")
+      .def("q", [](const mj::Plant& p) -> Vector { return p.q(); })
+      .def("v", [](const mj::Plant& p) -> Vector { return p.v(); })
+      .def("time", &mj::Plant::time)
+      .def("contact_steps", &mj::Plant::contact_steps)
+      .def("max_contact_force", &mj::Plant::max_contact_force);
+
+  py::class_<mj::TaskRun>(m, "TaskRun",
+                          "A task on its MuJoCo model, ready to run: the plant and the controller built as the "
+                          "command line builds them. Not thread-safe: one thread per TaskRun.")
+      .def(py::init<const Task&>(), py::arg("task"))
+      .def_property_readonly(
+          "task", [](const mj::TaskRun& r) { return r.task(); }, "a copy of the task it runs")
+      .def_property_readonly("controller", py::overload_cast<>(&mj::TaskRun::controller),
+                             py::return_value_policy::reference_internal)
+      .def_property_readonly("plant", &mj::TaskRun::plant, py::return_value_policy::reference_internal)
+      .def_property_readonly("model", [](const mj::TaskRun& r) { return mutable_model(r.shared_model()); },
+                             "the imported model (the plant's joints, without friction)")
+      .def_property_readonly("n", &mj::TaskRun::n)
+      .def_property_readonly("q0", [](const mj::TaskRun& r) -> Vector { return r.q0(); })
+      .def_property_readonly("torque_lower", [](const mj::TaskRun& r) -> Vector { return r.torque_lower(); })
+      .def_property_readonly("torque_upper", [](const mj::TaskRun& r) -> Vector { return r.torque_upper(); })
+      .def_property_readonly("unbounded_joints", &mj::TaskRun::unbounded_joints)
+      .def_property_readonly("notices", &mj::TaskRun::notices)
+      .def_property_readonly("warnings", &mj::TaskRun::warnings)
+      .def("run", &run_task_run,
+           "The task's closed loop from (q0, 0) for task.duration; a dict of numpy arrays t, residual, update_ms "
+           "(steps,), q, v, u, u_commanded (steps x n), updates (the successful updates) and summary (the run summary as a dict). The GIL is "
+           "released while it runs.");
+
+  m.def(
+      "run_task", [](const Task& task) { mj::TaskRun run(task); return run_task_run(run); }, py::arg("task"),
+      "TaskRun(task).run(): one sweep cell (a task with its settings). `idmpc sweep` runs whole sweeps.");
+}
+
+}  // namespace idmpc::python

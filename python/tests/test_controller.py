@@ -1,0 +1,236 @@
+"""The controller and the closed loop: a task's run and its record, a loop written in Python
+with the plant and the controller that gives the same run, and the errors of bad tasks."""
+
+import gc
+import threading
+
+import numpy as np
+import pytest
+
+import idmpc
+from conftest import MJCF
+
+DURATION = 0.3  # s: 300 control steps of the paper's swing-up, enough to move and to compare
+MAX_SPEED = 1e4  # rad/s: the closed loop's divergence threshold (closed_loop.cpp)
+
+
+def short_paper_task(formulation="id"):
+    task = idmpc.paper_task()
+    task.duration = DURATION
+    task.formulation = formulation
+    return task
+
+
+@pytest.fixture(scope="module", params=["id", "fd"])
+def record(request):
+    task = short_paper_task(request.param)
+    return task, idmpc.run_task(task)
+
+
+def test_record_shapes(record):
+    task, r = record
+    steps = int(np.floor(DURATION / task.dt + 0.5))
+    assert r["t"].shape == r["residual"].shape == r["update_ms"].shape == (steps,)
+    for key in ["q", "v", "u", "u_commanded"]:
+        assert r[key].shape == (steps, 4), key
+        assert r[key].dtype == np.float64 and r[key].flags["C_CONTIGUOUS"], key
+    np.testing.assert_allclose(r["t"], np.arange(steps) * task.dt, rtol=0, atol=1e-12)
+    # the first row is the measured initial state: the swing-up's (-pi, 0, 0, 0) at rest
+    np.testing.assert_array_equal(r["q"][0], [-np.pi, 0, 0, 0])
+    np.testing.assert_array_equal(r["v"][0], np.zeros(4))
+    assert np.all(np.isfinite(r["residual"])) and np.all(r["update_ms"] > 0)
+
+
+def test_summary_matches_the_record(record):
+    task, r = record
+    s = r["summary"]
+    assert s["n"] == 4 and s["steps"] == len(r["t"])
+    assert s["diverged"] is False
+    assert s["task"]["duration"] == DURATION and s["task"]["formulation"] == task.formulation
+    assert s["mean_residual"] == pytest.approx(r["residual"].mean(), rel=1e-12)
+    assert s["mean_update_ms"] == pytest.approx(r["update_ms"].mean(), rel=1e-9)
+    assert s["max_update_ms"] == r["update_ms"].max()
+    assert r["updates"] == s["steps"]
+    clamped = r["u"] != r["u_commanded"]
+    assert s["saturated_any"] == int(clamped.any(axis=1).sum())
+    assert s["saturated_steps"] == clamped.sum(axis=0).tolist()
+    # the applied torques lie within the limits the summary reports (JSON null: unbounded)
+    lower = np.array([-np.inf if x is None else x for x in s["torque_lower"]])
+    upper = np.array([np.inf if x is None else x for x in s["torque_upper"]])
+    assert np.all(r["u"] >= lower) and np.all(r["u"] <= upper)
+
+
+def test_task_run_accessors():
+    run = idmpc.TaskRun(short_paper_task())
+    assert run.n == 4 and run.model.n == 4 and run.model.joint_names == ["joint0", "joint1", "joint2", "joint3"]
+    np.testing.assert_array_equal(run.q0, [-np.pi, 0, 0, 0])
+    assert run.controller.n() == 4 and run.controller.dt() == 1e-3
+    assert run.plant.nv() == 4
+    assert run.torque_lower.shape == run.torque_upper.shape == (4,)
+    assert isinstance(run.notices, list) and isinstance(run.warnings, list)
+    assert run.task.duration == DURATION
+    run.task.duration = 5.0  # a copy: the run keeps its task
+    assert run.task.duration == DURATION
+
+
+def python_loop(run):
+    """run_closed_loop (closed_loop.cpp) step by step: initialize at the measured x(0), then per
+    step update at t from the measured state, apply the torque of the previous update for one
+    period and take the new one."""
+    plant, controller = run.plant, run.controller
+    dt = controller.dt()
+    steps = int(np.floor(run.task.duration / dt + 0.5))
+    plant.reset(run.q0, np.zeros(run.n))
+    tau = controller.initialize(plant.q(), plant.v())
+    assert controller.failure() == ""
+    updates = 0
+    for k in range(steps):
+        if not controller.update(k * dt, plant.q(), plant.v()):
+            break
+        updates += 1
+        ok, reason = plant.step(tau)
+        assert ok, reason
+        if np.abs(plant.v()).max() > MAX_SPEED:
+            break
+        tau = controller.torque()
+    return updates, np.abs(plant.q() - controller.q_ref()).max()
+
+
+def short_reach_task(formulation):
+    """The Panda's reach (offset-free tracking, full-horizon start, torque limits), 0.1 s of it."""
+    task = idmpc.load_task(str(MJCF / "panda_reach.json"))
+    task.duration = 0.1
+    task.formulation = formulation
+    return task
+
+
+# the Panda's full-horizon start takes seconds in FD (50 Newton steps with dense derivatives)
+@pytest.mark.parametrize("make,formulation", [(short_paper_task, "id"), (short_paper_task, "fd"),
+                                              (short_reach_task, "id")], ids=["arm4-id", "arm4-fd", "panda-id"])
+def test_python_loop_is_the_cpp_loop(make, formulation):
+    task = make(formulation)
+    r = idmpc.TaskRun(task).run()
+    updates, error = python_loop(idmpc.TaskRun(task))
+    assert updates == r["updates"] == r["summary"]["steps"]
+    assert error == r["summary"]["final_q_error"]
+    assert error > 0.1  # 0.3 s into the motion: far from the target, a meaningful comparison
+
+
+def test_torque_limit_clamps_the_applied_torque():
+    task = short_paper_task()
+    task.torque_limit = [5.0]
+    r = idmpc.run_task(task)
+    s = r["summary"]
+    assert s["torque_lower"] == [-5.0] * 4 and s["torque_upper"] == [5.0] * 4
+    assert np.abs(r["u"]).max() <= 5.0
+    clamped = r["u"] != r["u_commanded"]
+    # where clamped, the command was beyond the limit and the applied torque is the limit
+    assert clamped.sum() > 100
+    assert np.all(np.abs(r["u_commanded"][clamped]) > 5.0)
+    np.testing.assert_array_equal(np.abs(r["u"][clamped]), 5.0)
+    # the summary counts the steps of successful updates (a failed last update's row is logged)
+    assert s["saturated_any"] == int(clamped[: r["updates"]].any(axis=1).sum())
+    assert s["saturated_steps"] == clamped[: r["updates"]].sum(axis=0).tolist()
+    if s["diverged"]:
+        assert s["diverged_at"] == r["t"][-1] and s["divergence_reason"]
+        assert s["divergence_hint"].startswith("try ")
+
+
+def test_run_after_a_python_loop_starts_afresh():
+    task = short_paper_task()
+    expected = idmpc.run_task(task)
+    run = idmpc.TaskRun(task)
+    python_loop(run)
+    again = run.run()
+    np.testing.assert_array_equal(again["q"], expected["q"])
+    assert again["summary"]["final_q_error"] == expected["summary"]["final_q_error"]
+
+
+def test_controller_and_plant_keep_their_run_alive():
+    controller = idmpc.TaskRun(short_paper_task()).controller
+    plant = idmpc.TaskRun(short_paper_task()).plant
+    gc.collect()
+    plant.reset([-np.pi, 0, 0, 0], np.zeros(4))
+    tau = controller.initialize(plant.q(), plant.v())
+    assert plant.step(tau) == (True, "")
+    assert plant.time() == pytest.approx(controller.dt())
+
+
+def test_runs_in_threads_equal_the_serial_run():
+    task = short_paper_task()
+    expected = idmpc.run_task(task)
+    records = [None, None]
+
+    def run(i):
+        records[i] = idmpc.run_task(task)
+
+    threads = [threading.Thread(target=run, args=(i,)) for i in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for r in records:
+        np.testing.assert_array_equal(r["q"], expected["q"])
+        np.testing.assert_array_equal(r["u"], expected["u"])
+
+
+def test_controller_settings_defaults_are_the_cpp_defaults():
+    s = idmpc.ControllerSettings()
+    assert (s.formulation, s.derivatives, s.N) == ("id", "adjoint", 25)
+    assert (s.cgmres.kmax, s.cgmres.Tf, s.cgmres.dt, s.cgmres.shooting) == (10, 0.5, 1e-3, "single")
+    assert s.q_ref.shape == (0,) and s.horizon_model is None and s.limits_in_horizon
+
+
+def test_controller_from_settings():
+    model = idmpc.load_model(str(MJCF / "arm4.xml"))
+    settings = idmpc.ControllerSettings()
+    settings.formulation = "fd"
+    settings.derivatives = "matrix"
+    settings.N = 10
+    settings.cgmres.Tf = 0.2
+    settings.weights.Qq = np.ones(4)
+    settings.weights.Qv = 0.1 * np.ones(4)
+    settings.weights.R = 1e-4 * np.ones(4)
+    settings.q_ref = np.zeros(4)
+    assert settings.cgmres.Tf == 0.2 and settings.formulation == "fd"
+    controller = idmpc.Controller(model, settings)
+    del model  # the controller keeps its model
+    q, v = np.array([-0.5, 0, 0, 0]), np.zeros(4)
+    tau = controller.initialize(q, v)
+    assert tau.shape == (4,) and np.all(np.isfinite(tau))
+    assert controller.update(0.0, q, v) and controller.failure() == ""
+    controller.set_target(np.full(4, 0.1))
+    np.testing.assert_array_equal(controller.q_ref(), np.full(4, 0.1))
+    with pytest.raises(ValueError, match="update: q has 3 entries, expected n = 4"):
+        controller.update(0.0, q[:3], v)
+
+
+def test_bad_settings_are_value_errors():
+    settings = idmpc.ControllerSettings()
+    with pytest.raises(ValueError, match="fdd"):
+        settings.formulation = "fdd"
+    with pytest.raises(ValueError, match="tangential"):
+        settings.cgmres.shooting = "tangential"
+
+
+@pytest.mark.parametrize("field,value,message", [
+    ("qref", [0.0, 0.0, 0.0], "--qref (qref) has 3 values, expected 1 or 4 (one per joint)"),
+    ("Qq", [-1.0], "--Qq (weights.Qq) must be finite and non-negative, got -1.000000"),
+    ("duration", -1.0, "duration must be positive, got -1.000000"),
+    ("formulation", "pd", "unknown formulation 'pd': expected 'fd' or 'id'"),
+    ("N", 0, "N must be at least 1, got 0"),
+    ("dt", 0.0, "sampling period dt must be positive, got 0"),
+])
+def test_bad_task_values_are_value_errors_with_the_cpp_message(field, value, message):
+    task = short_paper_task()
+    setattr(task, field, value)
+    with pytest.raises(ValueError) as e:
+        idmpc.run_task(task)
+    assert str(e.value) == message
+
+
+def test_missing_model_is_a_runtime_error(tmp_path):
+    task = short_paper_task()
+    task.model = str(tmp_path / "none.xml")
+    with pytest.raises(RuntimeError, match="none.xml"):
+        idmpc.TaskRun(task)
