@@ -417,8 +417,8 @@ DYN_COLS = [("Rnea", "RNEA"), ("MjInverse", "mj_inverse"), ("Aba", "ABA"), ("MjF
             ("MinvApply", "M⁻¹x"), ("LtdlSolve", "LᵀDL solve"), ("MjSolveM", "mj_solveM"),
             ("LtdlFactorSolve", "LᵀDL factor + solve"), ("MjFactorSolveM", "mj_factorM + mj_solveM")]
 
-# the MuJoCo-relative levels Pinocchio 3.7 reached on this machine (issue 10: the upper end of
-# its range over n = 4…32, measured side by side with MuJoCo 2.2): kernel, MuJoCo baseline, level
+# the MuJoCo-relative levels Pinocchio 3.7 reached on this machine (the upper end of its range
+# over n = 4…32, measured side by side with MuJoCo 2.2): kernel, MuJoCo baseline, level
 PINOCCHIO_LEVELS = (("Crba", "MjInverse", 0.38, "CRBA"), ("AbaDerivatives", "MjForward", 2.3, "ABA derivatives"),
                     ("Minv", "MjForward", 0.73, "dense M⁻¹ from q"),
                     ("LtdlSolve", "MjSolveM", 1.25, "M⁻¹x with a factor of M (LᵀDL solve)"))
@@ -543,12 +543,12 @@ def targets_section(dyn, updates, stage_ops):
         worst = max((r for _, r in rs if r is not None), default=None)
         rows.append([text.format(limit), "; ".join(f"n={n}: {fmt_ratio(r)}" for n, r in rs) + f" (worst {fmt_ratio(worst)})",
                      verdict(ok)])
-    # Pinocchio's MuJoCo-relative levels, at n = 4…32 (the range issue 10 measured it over)
+    # Pinocchio's MuJoCo-relative levels, at n = 4…32 (the range they were measured over)
     for (a, b_, limit, what) in PINOCCHIO_LEVELS:
         rs = [(n, dyn_ratio(dyn, a, b_, n)) for n in dn if 4 <= n <= 32]
         ok = None if not rs or any(r is None for _, r in rs) else all(r <= limit for _, r in rs)
         base = {"MjInverse": "mj_inverse", "MjForward": "mj_forward", "MjSolveM": "mj_solveM"}[b_]
-        rows.append([f"{what} ≤ {limit} × {base} at n = 4…32 (Pinocchio's level, issue 10)",
+        rows.append([f"{what} ≤ {limit} × {base} at n = 4…32 (Pinocchio's level)",
                      "; ".join(f"n={n}: {fmt_ratio(r)}" for n, r in rs), verdict(ok)])
     return "## Target check\n\n" + table(["target", "measured", "verdict"], rows) + "\n"
 

@@ -226,12 +226,12 @@ void check_log_rows(const std::map<std::string, LoopRun>& runs) {
 //     FD/ID difference.
 // Measured FD vs ID (matrix, adjoint): 0.072, 0.069 whole run; 0.013, 0.027 after 50 ms;
 // 0.0013, 0.0020 after 0.5 s; angles within 0.009 rad. Same formulation matrix vs adjoint:
-// FD 0.012–0.033, ≤ 6e-5, ≤ 5e-5; ID 0.063, 0.032, 0.0023. Earlier builds of the same code,
-// rounding differently, measured up to 0.091, 0.032 and 0.0040.
-// The two windows that contain the start-up and the angles are at the mercy of rounding: after
-// the FD kernel rework (issue 10: other, equally exact, floating-point sums in CRBA and the
-// inertia transforms) the portable build measured ID matrix vs FD matrix 0.18, 0.096 and
-// 0.035 rad, and ID matrix vs ID adjoint — the same mathematics — 0.0955 and 0.030 rad:
+// FD 0.012–0.033, ≤ 6e-5, ≤ 5e-5; ID 0.063, 0.032, 0.0023; kernels that sum in another, equally
+// exact order give up to 0.091, 0.032 and 0.0040.
+// The two windows that contain the start-up and the angles are at the mercy of rounding: with
+// other floating-point sums in CRBA and the inertia transforms, the portable build measured ID
+// matrix vs FD matrix 0.18, 0.096 and 0.035 rad, and ID matrix vs ID adjoint — the same
+// mathematics — 0.0955 and 0.030 rad:
 // the first update's torques differ by 1e-7 relative and the swing amplifies it. So there FD
 // vs ID is bounded by twice the closed loop's own rounding sensitivity, measured in the same
 // run (matrix vs adjoint of one formulation), or by the fixed bound below if that is larger;
