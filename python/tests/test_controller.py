@@ -234,3 +234,24 @@ def test_missing_model_is_a_runtime_error(tmp_path):
     task.model = str(tmp_path / "none.xml")
     with pytest.raises(RuntimeError, match="none.xml"):
         idmpc.TaskRun(task)
+
+
+# the command line and the Python loop run the same task to the same result; the binary comes
+# from ctest's environment (IDMPC_BINARY), or is skipped when pytest runs on its own
+@pytest.mark.parametrize("formulation", ["id", "fd"])
+def test_python_loop_is_the_command_line(formulation, tmp_path):
+    import json
+    import os
+    import subprocess
+
+    binary = os.environ.get("IDMPC_BINARY")
+    if not binary:
+        pytest.skip("IDMPC_BINARY is not set (ctest sets it)")
+    summary = tmp_path / "summary.json"
+    done = subprocess.run([binary, "swingup", "--formulation", formulation, "--duration", str(DURATION),
+                           "--summary", str(summary)], capture_output=True, text=True)
+    assert done.returncode in (0, 2), done.stderr  # reached or not: a completed run
+    cli = json.loads(summary.read_text())
+    updates, error = python_loop(idmpc.TaskRun(short_paper_task(formulation)))
+    assert updates == cli["steps"]
+    assert error == cli["final_q_error"]
