@@ -1,9 +1,59 @@
 #!/usr/bin/env bash
-# The README's test command: installs dependencies, builds from scratch in Release, runs ctest.
+# The README's test command: installs dependencies, builds from scratch in Release, runs ctest,
+# then installs to a temporary prefix and uses the install from outside the sources.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 "$here/tools/setup.sh"
 export IDMPC_BUILD_DIR=${IDMPC_BUILD_DIR:-$here/build}
 IDMPC_CMAKE_ARGS="-DIDMPC_WERROR=ON ${IDMPC_CMAKE_ARGS:-}" "$here/tools/build.sh"
 cd "$IDMPC_BUILD_DIR"
+build=$(pwd)
 ctest --output-on-failure -j "$(nproc)"
+
+# the install: no source or build path inside, find_package(idmpc) from a program of its own
+# (examples/cpp), and the installed idmpc finding its data from any directory
+started=$SECONDS
+stage=$(mktemp -d)
+trap 'rm -rf "$stage"' EXIT
+prefix=$stage/prefix
+cmake --install "$build" --prefix "$prefix" >/dev/null
+leaks=()
+while IFS= read -r -d '' f; do
+  if strings -a "$f" | grep -qF -e "$here" -e "$build"; then leaks+=("$f"); fi
+done < <(find "$prefix" -type f -print0)
+if [ ${#leaks[@]} -gt 0 ]; then
+  echo "idmpc test: installed files hold the source or build path: ${leaks[*]}" >&2
+  exit 1
+fi
+# the core component alone loads Eigen and nothing else
+mkdir "$stage/core"
+cat > "$stage/core/CMakeLists.txt" <<'CMAKE'
+cmake_minimum_required(VERSION 3.25)
+project(core_only LANGUAGES CXX)
+find_package(idmpc CONFIG REQUIRED COMPONENTS core)
+if(NOT TARGET idmpc::core OR TARGET idmpc::experiment OR TARGET mujoco::mujoco OR TARGET nlohmann_json::nlohmann_json)
+  message(FATAL_ERROR "COMPONENTS core: expected idmpc::core and none of experiment, mujoco, nlohmann_json")
+endif()
+CMAKE
+cmake -S "$stage/core" -B "$stage/core/build" -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake -S "$here/examples/cpp" -B "$stage/example" -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" >/dev/null
+cmake --build "$stage/example" -j "$(nproc)"
+cd "$stage"
+# a program of its own finds no data beside itself: one line saying how to set it
+if env -u IDMPC_DATA_DIR "$stage/example/closed_loop" 10 2>"$stage/err"; then
+  echo "idmpc test: the example ran without a data directory" >&2
+  exit 1
+fi
+grep -q "IDMPC_DATA_DIR is not set" "$stage/err" || { cat "$stage/err" >&2; exit 1; }
+IDMPC_DATA_DIR=$prefix/share/idmpc "$stage/example/closed_loop" 500
+# the installed command: 0 (reached) or 2 (not reached in 0.2 s) completed the run
+status=0
+env -u IDMPC_DATA_DIR "$prefix/bin/idmpc" swingup --duration 0.2 || status=$?
+if [ "$status" -ne 0 ] && [ "$status" -ne 2 ]; then
+  echo "idmpc test: the installed 'idmpc swingup' failed (exit $status)" >&2
+  exit 1
+fi
+echo "idmpc test: install, consumer and installed idmpc passed in $((SECONDS - started)) s"
+cd "$here"
+
+# the Python module's checks come after this line

@@ -19,7 +19,9 @@
 
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
+#include "app/data_dir_option.hpp"
 #include "app/swingup.hpp"
+#include "idmpc/experiment/data_dir.hpp"
 #include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc::app {
@@ -27,7 +29,7 @@ namespace {
 
 struct SweepOptions {
   std::string out_dir = "results/sweep";
-  std::string models_dir = IDMPC_SOURCE_DIR "/mjcf";
+  std::string models_dir;             // empty: mjcf/ of the data directory
   std::string tables = "all";        // 12, 3, all or arms
   std::string arms_tasks;            // arms: the list of tasks; empty: arms.json of models_dir
   std::string offset_free = "task";  // arms: task (each task's own setting), on, off or both
@@ -98,7 +100,7 @@ PaperFigure paper_figure(const PaperTables& tables, const Cell& c) {
 
 // a file of the models directory (an absolute name stays as it is)
 std::string in_models(const SweepOptions& opt, const std::string& file) {
-  return (std::filesystem::path(opt.models_dir) / file).string();
+  return opt.models_dir.empty() ? shipped_mjcf_path(file) : (std::filesystem::path(opt.models_dir) / file).string();
 }
 
 // the list of tasks of the arms table: --arms-tasks, or arms.json of the models directory
@@ -446,7 +448,7 @@ std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cell
   const bool one_tolerance = tolerances.size() == 1;
   const std::string tolerance =
       one_tolerance ? fmt(*tolerances.begin()) + " rad" : std::string("the task's reach_tolerance");
-  const bool shipped_list = opt.arms_tasks.empty() && opt.models_dir == SweepOptions{}.models_dir;
+  const bool shipped_list = opt.arms_tasks.empty() && opt.models_dir.empty();
   std::ostringstream o;
   o << "# idmpc sweep: the real arms\n\n"
     << "Each task of `" << (shipped_list ? std::string("mjcf/arms.json") : arms_list(opt)) << "` under FD and ID, "
@@ -749,8 +751,9 @@ void register_sweep(CLI::App& app) {
   sub->add_option("--out", opt->out_dir, "output directory (sweep.csv and sweep.md; arms: arms.csv and arms.md)")
       ->capture_default_str();
   sub->add_option("--models", opt->models_dir,
-                  "directory with the models of mjcf/paper_tables.json (and arms.json, the default --arms-tasks)")
-      ->capture_default_str();
+                  "directory with the models of mjcf/paper_tables.json (and arms.json, the default --arms-tasks); "
+                  "default: mjcf/ of the data directory");
+  add_data_dir_option(*sub);
   CLI::Option* tables =
       sub->add_option("--tables", opt->tables,
                       "12 (arm4 N x kmax), 3 (n = 8..32), all, or arms (each task of --arms-tasks under FD and ID, "

@@ -6,6 +6,7 @@
 
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
+#include "app/data_dir_option.hpp"
 #include "app/output_paths.hpp"
 #include "app/swingup.hpp"
 #ifdef IDMPC_HAVE_RENDER
@@ -30,6 +31,7 @@ void register_swingup(CLI::App& app) {
   CLI::App* sub = app.add_subcommand(
       "swingup", "One closed-loop run of a task by C/GMRES (FD or ID) with MuJoCo in the loop");
   add_task_options(*sub, opt->run);
+  add_data_dir_option(*sub);
   sub->add_option("--log", opt->log, "CSV log, one row per control step");
   sub->add_option("--summary", opt->summary, "JSON summary");
   sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)");

@@ -1,5 +1,7 @@
 #include "idmpc/experiment/task.hpp"
 
+#include "idmpc/experiment/data_dir.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -130,8 +132,8 @@ std::string resolve_path(const std::string& file, const std::string& relative_to
 
 }  // namespace
 
-std::string paper_task_path() { return IDMPC_SOURCE_DIR "/mjcf/paper_swingup.json"; }
-std::string paper_tables_path() { return IDMPC_SOURCE_DIR "/mjcf/paper_tables.json"; }
+std::string paper_task_path() { return shipped_mjcf_path("paper_swingup.json"); }
+std::string paper_tables_path() { return shipped_mjcf_path("paper_tables.json"); }
 
 Task load_task(const std::string& path, const Task* base) {
   Task t = task_from_json(parse_file(path, "task file"), "task file '" + path + "'", base ? *base : arm_defaults());

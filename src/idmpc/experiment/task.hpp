@@ -77,9 +77,10 @@ struct Task {
   std::string shooting;  ///< "single" or "multiple"
 };
 
-/// @brief The paper's swing-up task file shipped with the sources (mjcf/paper_swingup.json).
+/// @brief The paper's swing-up task file, mjcf/paper_swingup.json of the data directory
+/// (data_dir.hpp; throws std::runtime_error saying how to set it when it is not found).
 std::string paper_task_path();
-/// @brief The paper's tables file (mjcf/paper_tables.json).
+/// @brief The paper's tables file, mjcf/paper_tables.json of the data directory.
 std::string paper_tables_path();
 
 /// @brief Reads a task file; fields it lacks come from `base` (the paper's task if null).
