@@ -40,12 +40,14 @@ cmake -S "$here/examples/cpp" -B "$stage/example" -DCMAKE_BUILD_TYPE=Release -DC
 cmake --build "$stage/example" -j "$(nproc)"
 cd "$stage"
 # a program of its own finds no data beside itself: one line saying how to set it
-if env -u IDMPC_DATA_DIR "$stage/example/closed_loop" 10 2>"$stage/err"; then
+if env -u IDMPC_DATA_DIR "$stage/example/closed_loop" 2>"$stage/err"; then
   echo "idmpc test: the example ran without a data directory" >&2
   exit 1
 fi
 grep -q "IDMPC_DATA_DIR is not set" "$stage/err" || { cat "$stage/err" >&2; exit 1; }
-IDMPC_DATA_DIR=$prefix/share/idmpc "$stage/example/closed_loop" 500
+IDMPC_DATA_DIR=$prefix/share/idmpc "$stage/example/closed_loop"
+# a task file of the user's own needs no data directory: an installed reach task, by path
+env -u IDMPC_DATA_DIR "$stage/example/closed_loop" "$prefix/share/idmpc/mjcf/lite6_reach.json" 200
 # the installed command: 0 (reached) or 2 (not reached in 0.2 s) completed the run
 status=0
 env -u IDMPC_DATA_DIR "$prefix/bin/idmpc" swingup --duration 0.2 || status=$?
@@ -53,7 +55,12 @@ if [ "$status" -ne 0 ] && [ "$status" -ne 2 ]; then
   echo "idmpc test: the installed 'idmpc swingup' failed (exit $status)" >&2
   exit 1
 fi
-echo "idmpc test: install, consumer and installed idmpc passed in $((SECONDS - started)) s"
-cd "$here"
 
-# the Python module's checks come after this line
+# the installed Python module, from outside the sources: it finds the installed data itself, and
+# the example's own loop and the library's give the same run
+python_dir=$(find "$prefix" -name 'idmpc*.so' -printf '%h\n' | head -n 1)
+[ -n "$python_dir" ] || { echo "idmpc test: the Python module was not installed" >&2; exit 1; }
+env -u IDMPC_DATA_DIR PYTHONPATH="$python_dir" /usr/bin/python3 "$here/examples/python/closed_loop.py" | tee "$stage/py.out"
+grep -q "^Python loop: " "$stage/py.out"
+echo "idmpc test: install, consumer, installed idmpc and Python module passed in $((SECONDS - started)) s"
+cd "$here"

@@ -1,53 +1,51 @@
-// The paper's swing-up task on its 4-link arm for a few hundred control steps: the task file and
-// model come from idmpc's data directory (IDMPC_DATA_DIR, or share/idmpc beside the executable),
-// C/GMRES computes the torque, MuJoCo moves the arm. Prints max|q - qref| at the start and the end.
+// A MuJoCo loop of your own with an idmpc controller: the controller is built from a task file
+// (model, target, weights, limits) as `idmpc swingup` builds it; the simulation is plain MuJoCo,
+// stepped here. Usage: closed_loop [TASK.json [STEPS]] (default: the paper's swing-up task from
+// idmpc's data directory, IDMPC_DATA_DIR or share/idmpc beside the executable; 1000 steps).
 #include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <string>
 
-#include "idmpc/experiment/task.hpp"
-#include "idmpc/mujoco/import.hpp"
-#include "idmpc/mujoco/load.hpp"
-#include "idmpc/mujoco/plant.hpp"
-#include "idmpc/solver/controller.hpp"
+#include <mujoco/mujoco.h>
+
+#include "idmpc/mujoco/task_run.hpp"
 
 int main(int argc, char** argv) try {
-  const long steps = argc > 1 ? std::atol(argv[1]) : 500;
+  const idmpc::Task task = argc > 1 ? idmpc::load_task(argv[1]) : idmpc::paper_task();
+  const long steps = argc > 2 ? std::atol(argv[2]) : 1000;
   idmpc::mj::install_error_handlers();
-  // the task (weights, horizon, C/GMRES settings) and its model
-  const idmpc::Task& task = idmpc::paper_task();
-  const idmpc::mj::LoadedModel loaded = idmpc::mj::load_model_translated(task.model);
-  const mjModel* m = loaded.model.get();
-  const idmpc::mj::ImportedModel imported = idmpc::mj::import_model(m, task.model);
-  const idmpc::ResolvedTask r = idmpc::resolve(task, imported.model.n);
+  idmpc::mj::TaskRun run(task);  // throws one line naming the file, field or joint
+  for (const std::string& line : run.notices()) std::cout << "note: " << line << "\n";
+  idmpc::Controller& controller = run.controller();
 
-  // the controller on the imported model, the plant on MuJoCo's
-  idmpc::Controller controller(
-      idmpc::OcpProblem(imported.model, r.formulation, r.derivatives, r.weights, r.qref, task.N), r.cgmres);
-  controller.set_torque_limits(imported.actuation.torque_lower, imported.actuation.torque_upper);
-  idmpc::mj::Plant plant(m, imported.actuation);
-  plant.set_control_period(r.cgmres.dt);
-  plant.reset(r.q0, idmpc::VecX<double>::Zero(r.q0.size()));
+  // your simulation: the task's model (newer MJCF translated for this MuJoCo as idmpc reads it),
+  // stepped at the control period, the controller's joint torques applied directly
+  const idmpc::mj::ModelPtr model = idmpc::mj::load_model(task.model);
+  mjModel* m = model.get();
+  m->opt.timestep = controller.dt();
+  m->opt.disableflags |= mjDSBL_ACTUATION;
+  mjData* d = mj_makeData(m);
+  Eigen::Map<idmpc::VecX<double>> q(d->qpos, m->nq), v(d->qvel, m->nv), applied(d->qfrc_applied, m->nv);
+  q = run.q0();
+  mj_forward(m, d);
 
-  // each update at t yields the torque for the next period; the current one is applied meanwhile
-  std::cout << "start: max|q - qref| = " << (plant.q() - r.qref).cwiseAbs().maxCoeff() << "\n";
-  idmpc::VecX<double> tau = controller.initialize(plant.q(), plant.v());
+  // each update at t gives the torque for [t + dt, t + 2 dt); the previous one applies meanwhile
+  idmpc::VecX<double> tau = controller.initialize(q, v);
   for (long k = 0; k < steps; ++k) {
-    const bool ok = controller.update(static_cast<double>(k) * r.cgmres.dt, plant.q(), plant.v());
-    std::string reason;
-    if (!ok) reason = controller.failure();
-    if (ok && !plant.step(tau, &reason)) reason = "plant: " + reason;
-    if (!reason.empty()) {
-      std::cerr << "closed_loop: diverged at step " << k << ": " << reason << "\n";
-      return 1;
+    if (!controller.update(static_cast<double>(k) * controller.dt(), q, v)) {
+      std::cerr << "closed_loop: diverged at t = " << d->time << " s: " << controller.failure() << "\n";
+      return 3;
     }
+    applied = tau;  // joint torques, within the actuators' range (the controller clamps)
+    mj_step(m, d);
     tau = controller.torque();
   }
-  std::cout << "after " << steps << " steps (" << plant.time() << " s): max|q - qref| = "
-            << (plant.q() - r.qref).cwiseAbs().maxCoeff() << "\n";
+  std::cout << "after " << d->time << " s: max|q - q_ref| = " << (q - controller.q_ref()).cwiseAbs().maxCoeff()
+            << "\n";
+  mj_deleteData(d);
   return 0;
 } catch (const std::exception& e) {
-  std::cerr << "closed_loop: error: " << e.what() << "\n";
+  std::cerr << "closed_loop: " << e.what() << "\n";
   return 1;
 }

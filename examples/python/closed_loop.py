@@ -47,5 +47,7 @@ error = np.abs(plant.q() - controller.q_ref()).max()
 print(f"Python loop:   {updates} updates, final max|q - q_ref| = {error:.6g}")
 
 record = idmpc.TaskRun(task).run()
-error = record["summary"]["final_q_error"]
-print(f"TaskRun.run(): {record['updates']} updates, final max|q - q_ref| = {error:.6g}")
+library_error = record["summary"]["final_q_error"]
+print(f"TaskRun.run(): {record['updates']} updates, final max|q - q_ref| = {library_error:.6g}")
+if (updates, error) != (record["updates"], library_error):
+    sys.exit("the Python loop and the library's loop differ")
