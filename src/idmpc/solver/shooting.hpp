@@ -115,11 +115,10 @@ class Shooting {
  private:
   // U's stage blocks into the input, d and ρ columns
   void unpack(In U, int stages);
-  // the stage dynamics at the states in x_ (stages independent given the states)
-  void stage_dynamics(int stages);
-  // FD matrix: the derivatives of stages 1 … stages − 1 in SIMD lanes, after the stage dynamics
-  // (OcpProblem::stage_derivative_lanes); whether any ran
-  bool derivatives_in_lanes(int stages);
+  // the horizon's trajectories, columns 0 … stages − 1, for the problem's calls across stages
+  StageTrajectories trajectories(int stages, const MatX<double>* gmm) {
+    return StageTrajectories{stages, x_.q, x_.v, a_, u_, rho_, gmm};
+  }
 
   OcpProblem problem_;
   bool timing_ = false;
