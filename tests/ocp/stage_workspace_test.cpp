@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <iostream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -76,6 +77,30 @@ TEST(StageWorkspace, AHamiltonianNeedsItsEvaluationsDynamics) {
       const Evaluation second = p.begin_evaluation();
       EXPECT_THROW(p.stage_hamiltonian(second, 1, q, z, z, out, none, none, z, z, hq, hv, F, true), std::logic_error);
     }
+  }
+}
+
+// the problem keeps its model alive: built from a shared model the caller lets go of, or from a
+// temporary, it evaluates as one built from a model that outlives it
+TEST(StageWorkspace, TheProblemOwnsItsModel) {
+  const Model model = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml").model;
+  const int n = model.n, N = 5;
+  const VecX<double> q0 = VecX<double>::Constant(n, 0.2), v0 = VecX<double>::Constant(n, -0.1);
+  const VecX<double> U = VecX<double>::LinSpaced(N * n, -1.0, 1.0);
+  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    SCOPED_TRACE(to_string(f));
+    Shooting reference(model, f, DerivativeMode::kAdjoint, paper_weights(n), VecX<double>::Zero(n), N);
+    auto shared = std::make_shared<const Model>(model);
+    Shooting from_shared(shared, f, DerivativeMode::kAdjoint, paper_weights(n), VecX<double>::Zero(n), N);
+    shared.reset();
+    Shooting from_temporary(load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml").model, f, DerivativeMode::kAdjoint,
+                            paper_weights(n), VecX<double>::Zero(n), N);
+    VecX<double> F(N * n), F_shared(N * n), F_temporary(N * n);
+    reference.residual(U, q0, v0, 0.3, F);
+    from_shared.residual(U, q0, v0, 0.3, F_shared);
+    from_temporary.residual(U, q0, v0, 0.3, F_temporary);
+    EXPECT_EQ(F, F_shared);
+    EXPECT_EQ(F, F_temporary);
   }
 }
 

@@ -15,6 +15,7 @@
 /// ρ), OcpProblem::stage_dim() long. The problem supplies the stage kernels; only the chaining of
 /// stages lives here.
 
+#include <memory>
 #include <utility>
 
 #include "idmpc/ocp/problem.hpp"
@@ -59,6 +60,9 @@ class Shooting {
   /// @brief The problem built in place (see OcpProblem's constructor).
   template <typename... Args>
   explicit Shooting(const Model& model, Args&&... args) : Shooting(OcpProblem(model, std::forward<Args>(args)...)) {}
+  template <typename... Args>
+  explicit Shooting(std::shared_ptr<const Model> model, Args&&... args)
+      : Shooting(OcpProblem(std::move(model), std::forward<Args>(args)...)) {}
 
   int n() const { return problem_.n(); }
   int N() const { return problem_.N(); }
