@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <stdexcept>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -164,6 +165,54 @@ TEST_P(OcpGradient, ResidualIsTheScaledGradientOfTheDiscreteCost) {
     EXPECT_LE((F - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kGradientMatch)
         << "F        " << F.transpose() << "\nexpected " << expected.transpose();
   }
+}
+
+// A target set between evaluations (OcpProblem::set_target) is the target of the next residual:
+// F is the gradient of the cost with the new q_ref and its torque reference ID(q_ref, 0, 0) − d̂,
+// after an evaluation with the old target, with a disturbance estimate set before, stages in lanes
+// and stage by stage.
+TEST_P(OcpGradient, AfterSetTargetResidualIsTheGradientWithTheNewTarget) {
+  const auto& [path, formulation_binding, mode] = GetParam();
+  const Formulation formulation = formulation_binding;
+  const Problem p = load_problem(path);
+  const int n = p.model.n, N = 6;
+  const double T = 0.3;
+  Data data(p.model);
+  std::mt19937 rng(11);
+  const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2),
+                     random_vector(rng, n, 1e-3, 1e-2), random_vector(rng, n, 1e-4, 1e-3)};
+  const VecX<double> old_target = random_vector(rng, n, -0.5, 0.5), target = random_vector(rng, n, -0.5, 0.5);
+  const VecX<double> d_hat = random_vector(rng, n, 0.5);
+  const VecX<double> q0 = random_vector(rng, n, -2.0, 2.0), v0 = random_vector(rng, n, -1.0, 1.0);
+  const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
+  const VecX<double> U =
+      formulation == Formulation::kInverseDynamics ? A : torques_of(p.model, data, A, q0, v0, T, N, d_hat);
+  const VecX<double> u_ref = holding_torque(p.model, data, target) - d_hat;
+  const MatX<double> grad = central_difference_jacobian(
+      [&](const VecX<double>& X) {
+        return VecX<double>::Constant(
+            1, cost(p.model, data, formulation, w, target, u_ref, Bounds{}, X, q0, v0, T, N, d_hat));
+      },
+      U);
+  const VecX<double> expected = grad.row(0).transpose() / (T / N);
+  for (bool lanes : {true, false}) {
+    SCOPED_TRACE(lanes ? "lanes" : "stage by stage");
+    Shooting ocp(p.model, formulation, mode, w, old_target, N);
+    ocp.set_stage_batching(lanes);
+    ocp.problem().set_disturbance(d_hat);
+    VecX<double> F(N * n);
+    ocp.residual(U, q0, v0, T, F);
+    ocp.problem().set_target(target);
+    EXPECT_EQ(ocp.problem().cost().q_ref(), target);
+    ocp.residual(U, q0, v0, T, F);
+    EXPECT_LE((F - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kGradientMatch)
+        << "F        " << F.transpose() << "\nexpected " << expected.transpose();
+  }
+  // sizes and finiteness are checked
+  OcpProblem problem(p.model, formulation, mode, w, old_target, N);
+  EXPECT_THROW(problem.set_target(VecX<double>::Zero(n + 1)), std::invalid_argument);
+  EXPECT_THROW(problem.set_target(VecX<double>::Constant(n, std::nan(""))), std::invalid_argument);
+  EXPECT_EQ(problem.cost().q_ref(), old_target);
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -47,6 +47,9 @@ void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen
                                const Eigen::MatrixBase<Vv>& v) {
   IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n && v.size() == model.n,
                     "aba_derivatives_after_aba: q, v must have size model.n");
+  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea_derivatives() | DataParts::minv_matrix() |
+                                    DataParts::aba_derivatives()),
+                    "aba_derivatives_after_aba: data was made without its derivative parts");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),
                     "aba_derivatives_after_aba needs aba(model, data, q, v, tau) at this (q, v) "
                     "first, and no other algorithm at another q since");

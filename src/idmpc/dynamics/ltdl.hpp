@@ -44,6 +44,7 @@ template <typename F> void for_ancestor_runs(const Model& model, bool chain, int
 /// Precondition: data.M holds M(q), from crba or rnea_derivatives (checked in debug builds).
 template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
   IDMPC_DEBUG_CHECK(data.n == model.n, "ltdl_factor: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::ltdl()), "ltdl_factor: data was made without its ltdl part");
   IDMPC_DEBUG_CHECK(data.passes.holds_mass_matrix(),
                     "ltdl_factor needs data.M: call crba or rnea_derivatives first");
   const int n = model.n;

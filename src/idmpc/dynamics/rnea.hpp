@@ -30,6 +30,7 @@ template <typename S, typename Q, typename Vv, typename Aa>
 [[gnu::flatten]] const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                     const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
   IDMPC_DEBUG_CHECK(data.n == model.n, "rnea: data was made for a model of another size");
+  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea()), "rnea: data was made without its rnea part");
   IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
                     "rnea: q, v, a must have size model.n");
   data.passes.rnea(q);
@@ -70,6 +71,8 @@ template <typename S, typename Q, typename Vv>
   IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),
                     "rnea_after_aba needs aba(model, data, q, v, tau) at this (q, v) first, and no "
                     "other algorithm at another q since");
+  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea() | DataParts::aba()),
+                    "rnea_after_aba: data was made without its rnea and aba parts");
   data.passes.rnea_after_aba();
   // body forces
   for (int i = 0; i < model.n; ++i) {

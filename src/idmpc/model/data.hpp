@@ -4,6 +4,7 @@
 /// the algorithms never allocate.
 
 #include <cstring>
+#include <type_traits>
 #include <vector>
 
 #include "idmpc/model/debug_check.hpp"
@@ -92,31 +93,74 @@ template <typename S> class PassRecord {
   bool rnea_ = false, aba_ = false, mass_matrix_ = false, ltdl_ = false;
 };
 
+/// @brief Groups of Data's buffers, by the algorithms that use them. A Data made with some
+/// parts leaves the buffers of the others empty (no heap), so that a workspace holds what its
+/// algorithms touch; calling an algorithm whose part is missing is a precondition violation,
+/// checked in debug builds. M belongs to the derivatives, CRBA and LᵀDL alike; Am to the dense
+/// M⁻¹ and to minv_apply_columns.
+class DataParts {
+ public:
+  constexpr DataParts() = default;
+  constexpr DataParts operator|(DataParts o) const { return DataParts(bits_ | o.bits_); }
+  /// every part of o is in this
+  constexpr bool has(DataParts o) const { return (bits_ & o.bits_) == o.bits_; }
+  /// some part of o is in this
+  constexpr bool any(DataParts o) const { return (bits_ & o.bits_) != 0; }
+
+  static constexpr DataParts rnea() { return DataParts(1u << 0); }  ///< X_up, V, A, F, h, vJ, tau
+  static constexpr DataParts aba() { return DataParts(1u << 1); }   ///< qdd, IA, pA, U, c, Ud, D, Dinv, u
+  static constexpr DataParts minv_apply() { return DataParts(1u << 2); }  ///< pz, az, Minv_x, Ud_parent
+  static constexpr DataParts rnea_vjp() { return DataParts(1u << 3); }    ///< fbar, abar, vbar, g_q, g_v, g_a
+  /// oX … H, dtau_dq, dtau_dv, M
+  static constexpr DataParts rnea_derivatives() { return DataParts(1u << 4); }
+  static constexpr DataParts minv_matrix() { return DataParts(1u << 5); }  ///< Minv, oYA, oUD, oDinv, Am
+  static constexpr DataParts aba_derivatives() { return DataParts(1u << 6); }  ///< da_dq, da_dv
+  static constexpr DataParts crba() { return DataParts(1u << 7); }          ///< Ic, M, Fc
+  static constexpr DataParts minv_columns() { return DataParts(1u << 8); }  ///< Pm, Am, Tm, Wm, rhs
+  static constexpr DataParts ltdl() { return DataParts(1u << 9); }          ///< Lt, Dl, Dlinv, y_ltdl
+  static constexpr DataParts all() { return DataParts((1u << 10) - 1); }
+
+ private:
+  constexpr explicit DataParts(unsigned bits) : bits_(bits) {}
+  unsigned bits_ = 0;
+};
+
 template <typename S> struct DataTpl {
   template <typename T> using List = std::vector<T>;
 
-  explicit DataTpl(const Model& model)
-      : n(model.n),
-        X_up(n), V(n), A(n), F(n), h(n), vJ(n),
-        tau(VecX<S>::Zero(n)), qdd(VecX<S>::Zero(n)),
-        IA(n), pA(n), U(n), c(n), Ud(n), D(VecX<S>::Zero(n)), Dinv(VecX<S>::Zero(n)),
-        u(VecX<S>::Zero(n)),
-        Ic(n), M(MatX<S>::Zero(n, n)),
-        oX(n), oS(n), oV(n), oA(n), oI(n), oB(n), oF(n), IcS(n), BcS(n), psi(n), w(n), G(n), H(n),
-        dtau_dq(MatX<S>::Zero(n, n)), dtau_dv(MatX<S>::Zero(n, n)),
-        Minv(MatX<S>::Zero(n, n)), da_dq(MatX<S>::Zero(n, n)),
-        da_dv(MatX<S>::Zero(n, n)),
-        fbar(n), abar(n), vbar(n),
-        g_q(VecX<S>::Zero(n)), g_v(VecX<S>::Zero(n)), g_a(VecX<S>::Zero(n)),
-        pz(n), az(n), Minv_x(VecX<S>::Zero(n)), oYA(n), oUD(n), oDinv(VecX<S>::Zero(n)),
-        Pm(n, Block6(6, n)), Am(n, Block6(6, n)), Tm(6, n), Wm(3, n),
-        rhs(MatX<S>::Zero(n, n)), Ud_parent(n),
-        Lt(MatX<S>::Zero(n, n)), Dl(VecX<S>::Zero(n)), Dlinv(VecX<S>::Zero(n)),
-        y_ltdl(VecX<S>::Zero(n)),
-        Fc(SpatialSet<S>::Zero(6, n)),
+  /// @brief Buffers of the given parts for the model's n joints (all by default).
+  explicit DataTpl(const Model& model, DataParts parts = DataParts::all())
+      : n(model.n), parts(parts),
+        X_up(list<Transform<S>>(P::rnea())), V(list<Vec6<S>>(P::rnea())), A(list<Vec6<S>>(P::rnea())),
+        F(list<Vec6<S>>(P::rnea())), h(list<Vec6<S>>(P::rnea())), vJ(list<Vec6<S>>(P::rnea())),
+        tau(vec(P::rnea())), qdd(vec(P::aba())),
+        IA(list<Mat6<S>>(P::aba())), pA(list<Vec6<S>>(P::aba())), U(list<Vec6<S>>(P::aba())),
+        c(list<Vec6<S>>(P::aba())), Ud(list<Vec6<S>>(P::aba())), D(vec(P::aba())), Dinv(vec(P::aba())),
+        u(vec(P::aba())),
+        Ic(list<Inertia<S>>(P::crba())), M(mat(P::rnea_derivatives() | P::crba() | P::ltdl())),
+        oX(list<Transform<S>>(P::rnea_derivatives())), oS(list<Vec6<S>>(P::rnea_derivatives())),
+        oV(list<Vec6<S>>(P::rnea_derivatives())), oA(list<Vec6<S>>(P::rnea_derivatives())),
+        oI(list<Inertia<S>>(P::rnea_derivatives())), oB(list<Mat6<S>>(P::rnea_derivatives())),
+        oF(list<Vec6<S>>(P::rnea_derivatives())), IcS(list<Vec6<S>>(P::rnea_derivatives())),
+        BcS(list<Vec6<S>>(P::rnea_derivatives())), psi(list<Vec6<S>>(P::rnea_derivatives())),
+        w(list<Vec6<S>>(P::rnea_derivatives())), G(list<Vec6<S>>(P::rnea_derivatives())),
+        H(list<Vec6<S>>(P::rnea_derivatives())),
+        dtau_dq(mat(P::rnea_derivatives())), dtau_dv(mat(P::rnea_derivatives())),
+        Minv(mat(P::minv_matrix())), da_dq(mat(P::aba_derivatives())), da_dv(mat(P::aba_derivatives())),
+        fbar(list<Vec6<S>>(P::rnea_vjp())), abar(list<Vec6<S>>(P::rnea_vjp())), vbar(list<Vec6<S>>(P::rnea_vjp())),
+        g_q(vec(P::rnea_vjp())), g_v(vec(P::rnea_vjp())), g_a(vec(P::rnea_vjp())),
+        pz(list<Vec6<S>>(P::minv_apply())), az(list<Vec6<S>>(P::minv_apply())), Minv_x(vec(P::minv_apply())),
+        oYA(list<Mat6<S>>(P::minv_matrix())), oUD(list<Vec6<S>>(P::minv_matrix())), oDinv(vec(P::minv_matrix())),
+        Pm(parts.has(P::minv_columns()) ? n : 0, Block6(6, n)),
+        Am(parts.any(P::minv_columns() | P::minv_matrix()) ? n : 0, Block6(6, n)),
+        Tm(6, cols(P::minv_columns())), Wm(3, cols(P::minv_columns())),
+        rhs(mat(P::minv_columns())), Ud_parent(list<Vec6<S>>(P::minv_apply())),
+        Lt(mat(P::ltdl())), Dl(vec(P::ltdl())), Dlinv(vec(P::ltdl())), y_ltdl(vec(P::ltdl())),
+        Fc(SpatialSet<S>::Zero(6, cols(P::crba()))),
         passes(n) {}
 
   int n;
+  DataParts parts;  ///< the buffers allocated (the others are empty)
 
   // kinematics and RNEA (link frames): X_up[i] = XJ(q_i)·X_tree[i]; V, A body velocity and
   // acceleration (A includes −gravity); F body force, then subtree force after the backward
@@ -182,7 +226,40 @@ template <typename S> struct DataTpl {
 
   /// what the buffers above hold (debug builds)
   PassRecord<S> passes;
+
+ private:
+  using P = DataParts;
+  // n of a buffer in one of the parts p, else 0
+  int cols(DataParts p) const { return parts.any(p) ? n : 0; }
+  template <typename T> List<T> list(DataParts p) const { return List<T>(static_cast<size_t>(cols(p))); }
+  VecX<S> vec(DataParts p) const { return VecX<S>::Zero(cols(p)); }
+  MatX<S> mat(DataParts p) const { return MatX<S>::Zero(cols(p), cols(p)); }
 };
+
+/// @brief Bytes of heap a workspace owns: every buffer's elements (fixed-size elements of the
+/// lists inline, the 6×n blocks' own heap added), without the allocator's bookkeeping.
+template <typename S> std::size_t heap_bytes(const DataTpl<S>& d) {
+  std::size_t b = 0;
+  const auto add = [&b](const auto& x) {
+    using X = std::decay_t<decltype(x)>;
+    if constexpr (std::is_base_of_v<Eigen::PlainObjectBase<X>, X>) {
+      b += static_cast<std::size_t>(x.size()) * sizeof(typename X::Scalar);
+    } else {
+      b += x.capacity() * sizeof(typename X::value_type);
+      if constexpr (std::is_base_of_v<Eigen::PlainObjectBase<typename X::value_type>, typename X::value_type>) {
+        if constexpr (X::value_type::SizeAtCompileTime == Eigen::Dynamic) {
+          for (const auto& e : x) b += static_cast<std::size_t>(e.size()) * sizeof(S);
+        }
+      }
+    }
+  };
+  const auto all = [&add](const auto&... x) { (add(x), ...); };
+  all(d.X_up, d.V, d.A, d.F, d.h, d.vJ, d.tau, d.qdd, d.IA, d.pA, d.U, d.c, d.Ud, d.D, d.Dinv, d.u, d.Ic, d.M,
+      d.oX, d.oS, d.oV, d.oA, d.oI, d.oB, d.oF, d.IcS, d.BcS, d.psi, d.w, d.G, d.H, d.dtau_dq, d.dtau_dv, d.Minv,
+      d.da_dq, d.da_dv, d.fbar, d.abar, d.vbar, d.g_q, d.g_v, d.g_a, d.pz, d.az, d.Minv_x, d.oYA, d.oUD, d.oDinv,
+      d.Pm, d.Am, d.Tm, d.Wm, d.rhs, d.Ud_parent, d.Lt, d.Dl, d.Dlinv, d.y_ltdl, d.Fc);
+  return b + 4 * static_cast<std::size_t>(d.n) * sizeof(S);  // the pass record's four points
+}
 
 using Data = DataTpl<double>;
 

@@ -37,12 +37,12 @@ void QuadraticCost::set_torque_reference(const In& u_ref) {
   u_ref_ = u_ref;
 }
 
-void QuadraticCost::set_q_ref(const In& q_ref) {
+void QuadraticCost::set_target(const In& q_ref) {
   if (q_ref.size() != q_ref_.size()) {
-    throw std::invalid_argument("q_ref has " + std::to_string(q_ref.size()) + " entries, expected " +
+    throw std::invalid_argument("target q_ref has " + std::to_string(q_ref.size()) + " entries, expected " +
                                 std::to_string(q_ref_.size()) + " (one per joint)");
   }
-  if (!q_ref.allFinite()) throw std::invalid_argument("q_ref is not finite");
+  if (!q_ref.allFinite()) throw std::invalid_argument("target q_ref is not finite");
   q_ref_ = q_ref;
 }
 

@@ -30,8 +30,9 @@ class QuadraticCost {
   const VecX<double>& u_ref() const { return u_ref_; }
   /// @brief Sets u_ref (size n, finite; else std::invalid_argument), without allocating.
   void set_torque_reference(const In& u_ref);
-  /// @brief Sets q_ref (size n, finite; else std::invalid_argument), without allocating.
-  void set_q_ref(const In& q_ref);
+  /// @brief Sets q_ref (size n, finite; else std::invalid_argument), without allocating; u_ref is
+  /// left as it is.
+  void set_target(const In& q_ref);
 
   /// @brief ∂φ/∂q and ∂φ/∂v.
   void terminal_gradient(In q, In v, Out phi_q, Out phi_v) const {

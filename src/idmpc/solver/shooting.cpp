@@ -57,32 +57,6 @@ void Shooting::unpack(In U, int stages) {
   }
 }
 
-void Shooting::stage_dynamics(int stages) {
-  if (problem_.stages_in_lanes()) {
-    for (int i0 = 0; i0 < stages; i0 += kStageLanes) {
-      problem_.stage_dynamics_lanes(i0, std::min(kStageLanes, stages - i0), x_.q, x_.v, a_, rho_, u_);
-    }
-    return;
-  }
-  const bool fd = problem_.formulation() == Formulation::kForwardDynamics;
-  for (int i = 0; i < stages; ++i) {
-    if (fd) {
-      problem_.stage_dynamics(i, x_.q.col(i), x_.v.col(i), u_.col(i), a_.col(i));
-    } else {
-      problem_.stage_dynamics(i, x_.q.col(i), x_.v.col(i), a_.col(i), u_.col(i));
-    }
-  }
-}
-
-bool Shooting::derivatives_in_lanes(int stages) {
-  if (!problem_.derivative_lanes()) return false;
-  // stage 0 needs no state derivatives (its costates λ_0, γ_0 are never used)
-  for (int i0 = 1; i0 < stages; i0 += kStageLanes) {
-    problem_.stage_derivative_lanes(i0, std::min(kStageLanes, stages - i0), x_.q, x_.v, u_);
-  }
-  return stages > 1;
-}
-
 void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int stages, const ShootingDefects* e) {
   using clock = std::chrono::steady_clock;
   const int sd = problem_.stage_dim();
@@ -91,7 +65,9 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   const double dtau = T / stages;
   const auto t0 = timing_ ? clock::now() : clock::time_point{};
 
-  // forward sweep: explicit Euler from the measured state (eq. 12), plus the defects
+  // forward sweep: explicit Euler from the measured state (eq. 12), plus the defects; FD's
+  // accelerations are the stage dynamics, ID's are the inputs
+  const Evaluation ev = problem_.begin_evaluation();
   const bool fd = problem_.formulation() == Formulation::kForwardDynamics;
   unpack(U, stages);
   auto& q = x_.q;
@@ -99,7 +75,7 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   q.col(0) = q0;
   v.col(0) = v0;
   for (int i = 0; i < stages; ++i) {
-    if (fd) problem_.stage_dynamics(i, q.col(i), v.col(i), u_.col(i), a_.col(i));
+    if (fd) problem_.stage_dynamics(ev, i, q.col(i), v.col(i), u_.col(i), a_.col(i));
     q.col(i + 1) = q.col(i) + dtau * v.col(i);
     v.col(i + 1) = v.col(i) + dtau * a_.col(i);
     if (e) {
@@ -107,9 +83,9 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
       v.col(i + 1) += e->v.col(i);
     }
   }
-  // the ID rollout does not depend on u: the stages' dynamics afterwards (in lanes if enabled)
-  if (!fd) stage_dynamics(stages);
-  const bool derivative_lanes = derivatives_in_lanes(stages);
+  // what runs once the states are known (ID: the stages' dynamics; in lanes if enabled)
+  StageTrajectories traj = trajectories(stages, nullptr);
+  problem_.stages_at_states(ev, traj);
   const auto t1 = timing_ ? clock::now() : t0;
 
   // terminal costates (eqs. 16, 18), then the backward sweep (eqs. 22–24); λ_0, γ_0 are
@@ -123,8 +99,8 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   }
   for (int i = stages - 1; i >= 0; --i) {
     const bool state = i > 0;
-    problem_.stage_hamiltonian(i, q.col(i), v.col(i), a_.col(i), u_.col(i), d_.col(i), rho_.col(i), lmd.col(i + 1),
-                               gmm.col(i + 1), hq_, hv_, F.segment(i * sd, sd), state);
+    problem_.stage_hamiltonian(ev, i, q.col(i), v.col(i), a_.col(i), u_.col(i), d_.col(i), rho_.col(i),
+                               lmd.col(i + 1), gmm.col(i + 1), hq_, hv_, F.segment(i * sd, sd), state);
     if (!state) break;
     lmd.col(i) = lmd.col(i + 1) + dtau * hq_;
     gmm.col(i) = gmm.col(i + 1) + dtau * hv_;
@@ -133,7 +109,6 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
       gmm.col(i) += e->gmm.col(i);
     }
   }
-  if (derivative_lanes) problem_.release_derivative_lanes();
   if (timing_) {
     times_.rollout += std::chrono::duration<double>(t1 - t0).count();
     times_.costate += std::chrono::duration<double>(clock::now() - t1).count();
@@ -151,6 +126,7 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
 
   // every stage at its stored state: the stages are independent (FD with adjoints: at the stored
   // costates too, so the whole stage runs in lanes)
+  const Evaluation ev = problem_.begin_evaluation();
   x_.q = at.q;
   x_.v = at.v;
   x_.q.col(0) = q0;
@@ -158,15 +134,8 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   x_.lmd = at.lmd;
   x_.gmm = at.gmm;
   unpack(U, N);
-  const bool costate_lanes = problem_.costate_lanes();
-  if (costate_lanes) {
-    for (int i0 = 0; i0 < N; i0 += kStageLanes) {
-      problem_.stage_lanes_at_costates(i0, std::min(kStageLanes, N - i0), x_.q, x_.v, u_, x_.gmm, a_);
-    }
-  } else {
-    stage_dynamics(N);
-  }
-  const bool derivative_lanes = derivatives_in_lanes(N);
+  StageTrajectories traj = trajectories(N, &x_.gmm);
+  problem_.stages_at_costates(ev, traj);
   const auto& q = x_.q;
   const auto& v = x_.v;
   e.q.col(N).setZero();
@@ -185,14 +154,12 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   e.gmm.col(0).setZero();
   for (int i = N - 1; i >= 0; --i) {
     const bool state = i > 0;
-    problem_.stage_hamiltonian(i, q.col(i), v.col(i), a_.col(i), u_.col(i), d_.col(i), rho_.col(i),
+    problem_.stage_hamiltonian(ev, i, q.col(i), v.col(i), a_.col(i), u_.col(i), d_.col(i), rho_.col(i),
                                x_.lmd.col(i + 1), x_.gmm.col(i + 1), hq_, hv_, F.segment(i * sd, sd), state);
     if (!state) break;
     e.lmd.col(i) = x_.lmd.col(i) - x_.lmd.col(i + 1) - dtau * hq_;
     e.gmm.col(i) = x_.gmm.col(i) - x_.gmm.col(i + 1) - dtau * hv_;
   }
-  if (costate_lanes) problem_.release_costate_lanes();
-  if (derivative_lanes) problem_.release_derivative_lanes();
   if (timing_) {
     times_.rollout += std::chrono::duration<double>(t1 - t0).count();
     times_.costate += std::chrono::duration<double>(clock::now() - t1).count();

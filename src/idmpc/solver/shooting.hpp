@@ -15,6 +15,7 @@
 /// ρ), OcpProblem::stage_dim() long. The problem supplies the stage kernels; only the chaining of
 /// stages lives here.
 
+#include <memory>
 #include <utility>
 
 #include "idmpc/ocp/problem.hpp"
@@ -59,6 +60,9 @@ class Shooting {
   /// @brief The problem built in place (see OcpProblem's constructor).
   template <typename... Args>
   explicit Shooting(const Model& model, Args&&... args) : Shooting(OcpProblem(model, std::forward<Args>(args)...)) {}
+  template <typename... Args>
+  explicit Shooting(std::shared_ptr<const Model> model, Args&&... args)
+      : Shooting(OcpProblem(std::move(model), std::forward<Args>(args)...)) {}
 
   int n() const { return problem_.n(); }
   int N() const { return problem_.N(); }
@@ -115,11 +119,10 @@ class Shooting {
  private:
   // U's stage blocks into the input, d and ρ columns
   void unpack(In U, int stages);
-  // the stage dynamics at the states in x_ (stages independent given the states)
-  void stage_dynamics(int stages);
-  // FD matrix: the derivatives of stages 1 … stages − 1 in SIMD lanes, after the stage dynamics
-  // (OcpProblem::stage_derivative_lanes); whether any ran
-  bool derivatives_in_lanes(int stages);
+  // the horizon's trajectories, columns 0 … stages − 1, for the problem's calls across stages
+  StageTrajectories trajectories(int stages, const MatX<double>* gmm) {
+    return StageTrajectories{stages, x_.q, x_.v, a_, u_, rho_, gmm};
+  }
 
   OcpProblem problem_;
   bool timing_ = false;

@@ -1,0 +1,199 @@
+#include "idmpc/ocp/fd_stages.hpp"
+
+#include <cassert>
+
+#include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/ocp/stage_lanes.hpp"
+
+namespace idmpc {
+namespace {
+
+template <DerivativeMode M, bool Lanes> DataParts stage_parts() {
+  const DataParts aba = DataParts::rnea() | DataParts::aba() | DataParts::minv_apply();
+  if constexpr (M == DerivativeMode::kAdjoint) return aba | DataParts::rnea_vjp();
+  if constexpr (Lanes) return aba;
+  return aba | DataParts::rnea_derivatives() | DataParts::minv_matrix() | DataParts::aba_derivatives();
+}
+
+template <DerivativeMode M, bool Lanes> DataParts lane_parts() {
+  if constexpr (!Lanes) return DataParts();
+  const DataParts aba = DataParts::rnea() | DataParts::aba();
+  if constexpr (M == DerivativeMode::kAdjoint) return aba | DataParts::minv_apply() | DataParts::rnea_vjp();
+  return aba | DataParts::rnea_derivatives() | DataParts::minv_matrix() | DataParts::aba_derivatives();
+}
+
+}  // namespace
+
+template <DerivativeMode M, bool Lanes>
+FdStages<M, Lanes>::FdStages(const Model& model, int N)
+    : stage_(static_cast<size_t>(N), Data(model, stage_parts<M, Lanes>())),
+      dynamics_stamp_(N),
+      lanes_stamp_(N),
+      lanes_(model, lane_parts<M, Lanes>()) {
+  const int n = model.n, nl = Lanes ? n : 0;
+  if constexpr (kDerivativeLanes) {
+    derivatives_.assign(static_cast<size_t>(N),
+                        Derivatives{MatX<double>::Zero(n, n), MatX<double>::Zero(n, n), MatX<double>::Zero(n, n)});
+  }
+  for (VecX<StagePack>* x : {&ql_, &vl_, &tl_, &gl_}) *x = VecX<StagePack>::Zero(nl);
+  const int Nc = kCostateLanes ? N : 0;
+  for (MatX<double>* x : {&mu_all_, &gq_all_, &gv_all_}) *x = MatX<double>::Zero(kCostateLanes ? n : 0, Nc);
+  for (Vec* x : {&tau_, &w_, &gq_, &gv_}) *x = Vec::Zero(n);
+}
+
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::dynamics(const StageTerms& terms, Evaluation ev, int i, In q, In v, In input, Out output) {
+  assert(i >= 0 && i < static_cast<int>(stage_.size()));
+  tau_ = input + terms.disturbance();
+  output = aba(terms.model(), stage_[static_cast<size_t>(i)], q, v, tau_);
+  dynamics_stamp_.stamp(i, ev);
+}
+
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::at_states(const StageTerms& terms, Evaluation ev, StageTrajectories& x) {
+  if constexpr (kDerivativeLanes) {
+    // stage 0 needs no state derivatives (its costates λ_0, γ_0 are never used)
+    for (int i0 = 1; i0 < x.stages; i0 += kStageLanes) {
+      derivative_lanes(terms, ev, i0, std::min(kStageLanes, x.stages - i0), x);
+    }
+  }
+}
+
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::at_costates(const StageTerms& terms, Evaluation ev, StageTrajectories& x) {
+  assert(x.gmm != nullptr);
+  if constexpr (kCostateLanes) {
+    for (int i0 = 0; i0 < x.stages; i0 += kStageLanes) {
+      costate_lanes(terms, ev, i0, std::min(kStageLanes, x.stages - i0), x);
+    }
+  } else {
+    for (int i = 0; i < x.stages; ++i) dynamics(terms, ev, i, x.q.col(i), x.v.col(i), x.u.col(i), x.a.col(i));
+    at_states(terms, ev, x);
+  }
+}
+
+// ∂q̈/∂q, ∂q̈/∂v and M⁻¹ for up to kStageLanes stages per ABA and its derivatives; unused lanes
+// repeat the last stage
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::derivative_lanes(const StageTerms& terms, Evaluation ev, int i0, int count,
+                                          const StageTrajectories& x) {
+  const Model& model = terms.model();
+  const int n = model.n;
+  detail::pack_lanes(x.q, i0, count, 0, ql_);
+  detail::pack_lanes(x.v, i0, count, 0, vl_);
+  detail::pack_torque_lanes(x.u, terms.disturbance(), i0, count, tl_);
+  aba(model, lanes_, ql_, vl_, tl_);
+  aba_derivatives_after_aba(model, lanes_, ql_, vl_);
+  for (int k = 0; k < count; ++k) {
+    Derivatives& d = derivatives_[static_cast<size_t>(i0 + k)];
+    for (int c = 0; c < n; ++c) {
+      for (int r = 0; r < n; ++r) {
+        d.da_dq(r, c) = lanes_.da_dq(r, c)[k];
+        d.da_dv(r, c) = lanes_.da_dv(r, c)[k];
+        d.Minv(r, c) = lanes_.Minv(r, c)[k];
+      }
+    }
+    lanes_stamp_.stamp(i0 + k, ev);
+  }
+}
+
+// a = FD(q, v, u), μ = M⁻¹γ_{i+1}, (∂ID/∂q)ᵀμ and (∂ID/∂v)ᵀμ for up to kStageLanes stages per
+// ABA; unused lanes repeat the last stage
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::costate_lanes(const StageTerms& terms, Evaluation ev, int i0, int count,
+                                       StageTrajectories& x) {
+  const Model& model = terms.model();
+  detail::pack_lanes(x.q, i0, count, 0, ql_);
+  detail::pack_lanes(x.v, i0, count, 0, vl_);
+  detail::pack_torque_lanes(x.u, terms.disturbance(), i0, count, tl_);
+  detail::pack_lanes(*x.gmm, i0, count, 1, gl_);  // γ_{i+1}
+  detail::unpack_lanes(aba(model, lanes_, ql_, vl_, tl_), i0, count, x.a);
+  // μ = M⁻¹γ by the ABA factorization, then the RNEA part of the stage and its adjoint at μ
+  const VecX<StagePack>& mu = minv_apply(model, lanes_, gl_);
+  detail::unpack_lanes(mu, i0, count, mu_all_);
+  gl_ = mu;  // rnea_vjp reads its weights while it overwrites data: a copy
+  rnea_after_aba(model, lanes_, ql_, vl_);
+  rnea_vjp(model, lanes_, gl_);
+  detail::unpack_lanes(lanes_.g_q, i0, count, gq_all_);
+  detail::unpack_lanes(lanes_.g_v, i0, count, gv_all_);
+  for (int k = 0; k < count; ++k) lanes_stamp_.stamp(i0 + k, ev);
+}
+
+template <DerivativeMode M, bool Lanes>
+template <typename Hu>
+void FdStages<M, Lanes>::adjoint_products(const Model& model, Data& data, In q, In v, In gmm_next, Hu hu,
+                                          bool state) {
+  const VecX<double>& mu = minv_apply(model, data, gmm_next);  // ABA factorization of the stage
+  hu = w_ + mu;
+  if (!state) return;
+  if constexpr (M == DerivativeMode::kAdjoint) {
+    rnea_after_aba(model, data, q, v);  // a = data.qdd: the stage's aba pass, completed
+    rnea_vjp(model, data, mu);
+    gq_ = -data.g_q;
+    gv_ = -data.g_v;
+  } else {
+    assert(false && "matrix mode takes the adjoint way on stage 0 only");
+  }
+}
+
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int i, In q, In v, In, In u, In d,
+                                     In rho, In lmd_next, In gmm_next, Out hq, Out hv, Out F, bool state) {
+  assert(i >= 0 && i < static_cast<int>(stage_.size()));
+  const Model& model = terms.model();
+  auto hu = F.head(model.n);
+  // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = w + μ
+  terms.torque_gradient(u, rho, w_);
+  if constexpr (kCostateLanes) {
+    if (lanes_stamp_.current(i, ev)) {
+      // at these costates, from costate_lanes
+      hu = w_ + mu_all_.col(i);
+      gq_ = -gq_all_.col(i);
+      gv_ = -gv_all_.col(i);
+      terms.close_stage(q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+      return;
+    }
+  }
+  dynamics_stamp_.require(i, ev, "the Hamiltonian");
+  Data& data = stage_[static_cast<size_t>(i)];
+  if constexpr (!kMatrix) {
+    adjoint_products(model, data, q, v, gmm_next, hu, state);
+  } else if (!state) {
+    adjoint_products(model, data, q, v, gmm_next, hu, false);
+  } else {
+    // from derivative_lanes, or now: the stage's ABA is in data from dynamics
+    const MatX<double>* da_dq = &data.da_dq;
+    const MatX<double>* da_dv = &data.da_dv;
+    const MatX<double>* Minv = &data.Minv;
+    if constexpr (kDerivativeLanes) {
+      lanes_stamp_.require(i, ev, "the Hamiltonian's derivatives");
+      const Derivatives& D = derivatives_[static_cast<size_t>(i)];
+      da_dq = &D.da_dq;
+      da_dv = &D.da_dv;
+      Minv = &D.Minv;
+    } else {
+      aba_derivatives_after_aba(model, data, q, v);
+    }
+    gq_.noalias() = da_dq->transpose() * gmm_next;
+    gv_.noalias() = da_dv->transpose() * gmm_next;
+    hu = w_;
+    hu.noalias() += Minv->transpose() * gmm_next;
+  }
+  terms.close_stage(q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+}
+
+template <DerivativeMode M, bool Lanes> std::size_t FdStages<M, Lanes>::workspace_bytes() const {
+  std::size_t b = stage_.capacity() * sizeof(Data) + heap_bytes(lanes_) +
+                  derivatives_.capacity() * sizeof(Derivatives);
+  for (const Data& d : stage_) b += heap_bytes(d);
+  for (const Derivatives& d : derivatives_) b += 3 * static_cast<std::size_t>(d.Minv.size()) * sizeof(double);
+  for (const MatX<double>* x : {&mu_all_, &gq_all_, &gv_all_}) b += static_cast<std::size_t>(x->size()) * sizeof(double);
+  return b;
+}
+
+template class FdStages<DerivativeMode::kMatrix, false>;
+template class FdStages<DerivativeMode::kMatrix, true>;
+template class FdStages<DerivativeMode::kAdjoint, false>;
+template class FdStages<DerivativeMode::kAdjoint, true>;
+
+}  // namespace idmpc
