@@ -12,9 +12,15 @@ namespace idmpc {
 
 namespace {
 
-// the horizon's problem of `settings` on `model`, its sizes checked
-OcpProblem make_problem(const Model& model, const ControllerSettings& s) {
-  const int n = model.n;
+// the horizon's problem of `settings` for the plant model `model`, its sizes checked
+OcpProblem make_problem(const std::shared_ptr<const Model>& model, const ControllerSettings& s) {
+  if (!model) throw std::invalid_argument("controller: no model given");
+  std::shared_ptr<const Model> horizon = s.horizon_model ? s.horizon_model : model;
+  const int n = model->n;
+  if (horizon->n != n) {
+    throw std::invalid_argument("controller settings: the horizon model has " + std::to_string(horizon->n) +
+                                " joints, the model " + std::to_string(n));
+  }
   auto check_size = [n](const VecX<double>& x, const char* name, bool may_be_empty) {
     if (x.size() == n || (may_be_empty && x.size() == 0)) return;
     throw std::invalid_argument(std::string("controller settings: ") + name + " has " + std::to_string(x.size()) +
@@ -33,16 +39,13 @@ OcpProblem make_problem(const Model& model, const ControllerSettings& s) {
       (s.torque_lower.array().isFinite() || s.torque_upper.array().isFinite()).any()) {
     limits = TorqueLimits{s.torque_lower, s.torque_upper};
   }
-  return OcpProblem(model, s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
+  return OcpProblem(std::move(horizon), s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
 }
 
 }  // namespace
 
 Controller::Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings)
-    : Controller(model ? make_problem(settings.horizon_model ? *settings.horizon_model : *model, settings)
-                       : throw std::invalid_argument("controller: no model given"),
-                 settings.cgmres, model) {
-  horizon_model_ = settings.horizon_model ? settings.horizon_model : model;
+    : Controller(make_problem(model, settings), settings.cgmres, model) {
   nlp_.set_stage_batching(settings.simd_stages);
   const int n = this->n();
   if (settings.torque_lower.size() == n) {
@@ -59,7 +62,7 @@ Controller::Controller(std::shared_ptr<const Model> model, const ControllerSetti
 Controller::Controller(OcpProblem problem, const CgmresSettings& settings, std::shared_ptr<const Model> plant_model)
     : nlp_(std::move(problem)),
       solver_(nlp_, settings),
-      plant_model_(plant_model ? std::move(plant_model) : std::make_shared<const Model>(nlp_.problem().model())),
+      plant_model_(plant_model ? std::move(plant_model) : nlp_.problem().model_ptr()),
       data_(*plant_model_) {
   if (plant_model_->n != nlp_.n()) {
     throw std::invalid_argument("the plant model has " + std::to_string(plant_model_->n) + " joints, the problem " +

@@ -125,7 +125,6 @@ class Controller {
   // the clamp [lower, upper], checked; with match_horizon, equal to the horizon's bounds where it has any
   void check_and_set_clamp(const Vec& lower, const Vec& upper, bool match_horizon);
 
-  std::shared_ptr<const Model> horizon_model_;  ///< the problem's model, kept alive
   Shooting nlp_;
   Cgmres solver_;
   std::shared_ptr<const Model> plant_model_;  ///< for the ID torque and the observer
