@@ -60,6 +60,21 @@ TEST(StageWorkspace, HoldsWhatItsFormulationAndModeUse) {
   }
 }
 
+// the same on a 7-joint arm, for the record
+TEST(StageWorkspace, PrintsTheBytesPerStageOfAnArm) {
+  const Model arm = load_problem(IDMPC_SOURCE_DIR "/mjcf/iiwa14.xml").model;
+  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    for (DerivativeMode mode : {DerivativeMode::kMatrix, DerivativeMode::kAdjoint}) {
+      for (bool lanes : {true, false}) {
+        const std::size_t b = bytes_per_stage(arm, f, mode, lanes);
+        std::cout << to_string(f) << "_" << to_string(mode) << (lanes ? "_lanes" : "_scalar") << ": " << b
+                  << " B per stage at n = " << arm.n << " (full Data " << full_data_per_stage(arm) << ")\n";
+        EXPECT_LT(b, full_data_per_stage(arm));
+      }
+    }
+  }
+}
+
 // the Hamiltonian reads a stage's linearization only under the evaluation that made it
 TEST(StageWorkspace, AHamiltonianNeedsItsEvaluationsDynamics) {
   const Model model = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml").model;
