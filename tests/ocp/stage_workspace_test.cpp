@@ -50,7 +50,9 @@ TEST(StageWorkspace, HoldsWhatItsFormulationAndModeUse) {
         // O(n): four times the joints, at most four times the bytes (a Data's own size is the
         // constant); one n×n buffer would make it sixteen
         const bool linear = mode == DerivativeMode::kAdjoint || (f == Formulation::kInverseDynamics && lanes);
-        if (linear) EXPECT_LE(l, 4 * s);
+        if (linear) {
+          EXPECT_LE(l, 4 * s);
+        }
         // ID in lanes keeps its three products per stage and nothing else
         if (f == Formulation::kInverseDynamics && lanes) {
           EXPECT_EQ(l, 3 * static_cast<std::size_t>(large.n) * sizeof(double));
