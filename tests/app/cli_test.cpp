@@ -36,6 +36,7 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/mujoco/reference.hpp"
+#include "support/command.hpp"
 #include "support/sanitizers.hpp"
 
 namespace idmpc {
@@ -76,19 +77,9 @@ const char* kBallJointModel = R"(<mujoco model="ball">
 </mujoco>
 )";
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string quote(const std::string& s) { return "'" + s + "'"; }
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = test::CommandResult;
+using test::quote;
+using test::slurp;
 
 std::vector<std::string> lines_of(const std::string& text) {
   std::vector<std::string> lines;
@@ -128,17 +119,7 @@ class Cli : public ::testing::Test {
   // runs `idmpc <args>` from the test directory, stdout and stderr captured to files; `shell`
   // (e.g. "ulimit -v 3000000;") runs first in the same shell
   Result idmpc(const std::string& args, const std::string& shell = "") {
-    const fs::path out = dir_ / ".stdout", err = dir_ / ".stderr";
-    const std::string cmd = "cd " + quote(dir_.string()) + " && " + shell + " " + quote(kBinary) + " " + args +
-                            " > " + quote(out.string()) + " 2> " + quote(err.string());
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    fs::remove(out);
-    fs::remove(err);
-    return r;
+    return test::run_command(shell + " " + quote(kBinary) + " " + args, dir_);
   }
 
   fs::path write(const std::string& name, const std::string& text) {

@@ -11,24 +11,16 @@
 #include <sstream>
 #include <string>
 
+#include "support/command.hpp"
+
 namespace idmpc {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct Result {
-  int code = -1;
-  std::string out, err;
-};
-
-std::string quote(const std::string& s) { return "'" + s + "'"; }
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Result = test::CommandResult;
+using test::quote;
+using test::slurp;
 
 // a prefix holding a copy of the idmpc binary in bin/ and, unless removed, share/idmpc/mjcf
 class InstalledLayout : public ::testing::Test {
@@ -50,16 +42,8 @@ class InstalledLayout : public ::testing::Test {
   // runs the copied idmpc from a directory outside the sources with IDMPC_DATA_DIR unset
   // unless `env` sets it
   Result idmpc(const std::string& args, const std::string& env = "") {
-    const fs::path work = prefix_ / "work", out = work / ".stdout", err = work / ".stderr";
-    const std::string cmd = "cd " + quote(work.string()) + " && env -u IDMPC_DATA_DIR " + env + " " +
-                            quote((prefix_ / "bin/idmpc").string()) + " " + args + " > " + quote(out.string()) +
-                            " 2> " + quote(err.string());
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
+    return test::run_command("env -u IDMPC_DATA_DIR " + env + " " + quote((prefix_ / "bin/idmpc").string()) + " " + args,
+                             prefix_ / "work");
   }
   fs::path prefix_;
 };

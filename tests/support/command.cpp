@@ -1,0 +1,34 @@
+#include "support/command.hpp"
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+namespace idmpc::test {
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CommandResult run_command(const std::string& command, const std::filesystem::path& dir) {
+  const std::filesystem::path out = dir / ".stdout", err = dir / ".stderr";
+  const std::string cmd = "cd " + quote(dir.string()) + " && " + command + " > " + quote(out.string()) + " 2> " +
+                          quote(err.string());
+  const int status = std::system(cmd.c_str());
+  CommandResult r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = slurp(out);
+  r.err = slurp(err);
+  std::filesystem::remove(out);
+  std::filesystem::remove(err);
+  return r;
+}
+
+}  // namespace idmpc::test

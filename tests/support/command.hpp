@@ -1,0 +1,25 @@
+#pragma once
+/// @file command.hpp
+/// @brief Running a command line in a test: its exit code and captured output.
+
+#include <filesystem>
+#include <string>
+
+namespace idmpc::test {
+
+struct CommandResult {
+  int code = -1;  ///< exit code; -1 when the command did not exit normally (a signal)
+  std::string out, err;
+};
+
+/// @brief `s` in single quotes for the shell.
+std::string quote(const std::string& s);
+
+/// @brief The whole content of a file ("" if it cannot be read).
+std::string slurp(const std::filesystem::path& p);
+
+/// @brief Runs the shell command `command` in directory `dir`, stdout and stderr captured
+/// through the files dir/.stdout and dir/.stderr, removed afterwards.
+CommandResult run_command(const std::string& command, const std::filesystem::path& dir);
+
+}  // namespace idmpc::test
