@@ -62,8 +62,8 @@ TEST_P(OcpModes, MatrixAndAdjointGiveTheSameResidual) {
 // C/GMRES's Fréchet product (F(U + hW) − F(U))/h, h = 1e-8, against a central difference with
 // a step large enough to be free of rounding: the rounding noise of F, divided by h, must stay
 // small. On the ill-conditioned 32-link chain (cond M ≈ 1e6) the matrix-mode FD problem is
-// the exception (≈ 2e-2, from forming ∂q̈/∂q before multiplying by γ; measured and reported
-// in the README), so it is checked on the well-conditioned models only.
+// the exception (from forming ∂q̈/∂q before multiplying by γ; docs/dynamics.md), so it is
+// checked on the well-conditioned models only.
 TEST(OcpFrechetProduct, ForwardDifferenceWithH1e8IsAccurate) {
   for (const std::string name : {"arm4", "tree", "chain32"}) {
     const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/" + name + ".xml");
