@@ -8,7 +8,7 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 results=${IDMPC_RESULTS:-$here/results}
 "$here/tools/setup.sh"
 export IDMPC_BUILD_DIR=${IDMPC_RUN_BUILD_DIR:-$here/build-release}
-IDMPC_CMAKE_ARGS="-DIDMPC_NATIVE=ON -DIDMPC_BUILD_TESTS=OFF -DIDMPC_BUILD_BENCH=OFF" "$here/tools/build.sh"
+IDMPC_CMAKE_ARGS="-DIDMPC_NATIVE=ON -DIDMPC_BUILD_TESTS=OFF -DIDMPC_BUILD_BENCH=OFF -DIDMPC_BUILD_PYTHON=OFF" "$here/tools/build.sh"
 idmpc="$IDMPC_BUILD_DIR/src/idmpc"
 mkdir -p "$results"
 model="$here/mjcf/arm4.xml"
