@@ -1346,20 +1346,7 @@ TEST_F(Cli, DynamicsReplacesServosByJointTorques) {
 }
 
 // an acrobot: one motor on the elbow, the shoulder passive
-const char* kAcrobotModel = R"(<mujoco model="acrobot">
-  <worldbody>
-    <body name="upper_arm" pos="0 0 2">
-      <joint name="shoulder" type="hinge" axis="0 1 0"/>
-      <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.05" mass="1" contype="0" conaffinity="0"/>
-      <body name="lower_arm" pos="0 0 -1">
-        <joint name="elbow" type="hinge" axis="0 1 0"/>
-        <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.049" mass="1" contype="0" conaffinity="0"/>
-      </body>
-    </body>
-  </worldbody>
-  <actuator><motor name="elbow" joint="elbow" gear="2"/></actuator>
-</mujoco>
-)";
+const std::string kAcrobotModel = slurp(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/acrobot.xml");
 
 TEST_F(Cli, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
   write("acrobot.xml", kAcrobotModel);

@@ -194,19 +194,7 @@ TEST_F(ImportTest, UnderActuatedModelIsRejectedNamingTheBareJoint) {
 // direct torques would drive the joints the model leaves without an actuator: only on request
 TEST_F(ImportTest, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
   // an acrobot: the shoulder is passive
-  const mj::ModelPtr m = mj::load_model_from_string(R"(<mujoco model="acrobot">
-  <worldbody>
-    <body name="upper_arm" pos="0 0 2">
-      <joint name="shoulder" type="hinge" axis="0 1 0"/>
-      <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.05" mass="1" contype="0" conaffinity="0"/>
-      <body name="lower_arm" pos="0 0 -1">
-        <joint name="elbow" type="hinge" axis="0 1 0"/>
-        <geom type="capsule" fromto="0 0 0 0 0 -1" size="0.049" mass="1" contype="0" conaffinity="0"/>
-      </body>
-    </body>
-  </worldbody>
-  <actuator><motor name="elbow" joint="elbow" gear="2" ctrllimited="true" ctrlrange="-1 1"/></actuator>
-</mujoco>)");
+  const mj::ModelPtr m = mj::load_model(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/acrobot.xml");
   mj::ImportOptions options = direct_torques();
   expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "acrobot.xml", options); },
                                              {"under-actuated", "joint 'shoulder' of body 'upper_arm'",

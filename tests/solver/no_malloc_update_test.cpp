@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cstddef>
 #include <limits>
+#include <memory>
 #include <string>
 #include <tuple>
 
@@ -90,59 +91,49 @@ TEST(NoMallocCounter, IsArmed) {
 
 using Variant = std::tuple<Formulation, DerivativeMode, ShootingScheme, bool>;
 
-class NoMallocUpdate : public ::testing::TestWithParam<Variant> {};
+// a solver of the variant on arm4, started (initialized and updated once: the first update may
+// size workspaces) at a state away from the target
+class NoMallocUpdate : public ::testing::TestWithParam<Variant> {
+ protected:
+  void SetUp() override {
+    const auto& [formulation, mode, shooting, limited] = GetParam();
+    const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+    const double inf = std::numeric_limits<double>::infinity();
+    const TorqueLimits limits = limited ? TorqueLimits{(VecX<double>(4) << -20, -inf, -20, -inf).finished(),
+                                                       (VecX<double>(4) << 20, inf, 20, inf).finished()}
+                                        : TorqueLimits{};
+    ocp_ = std::make_unique<Shooting>(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, limits);
+    s_.shooting = shooting;
+    solver_ = std::make_unique<Cgmres>(*ocp_, s_);
+    solver_->initialize(0.5, q_, v_);
+    ASSERT_TRUE(solver_->update(0.5, q_, v_));
+  }
+  // allocations during `before` and three updates
+  template <typename Before> long allocations_of_updates(Before before) {
+    CountAllocations c;
+    before();
+    for (int k = 1; k <= 3; ++k) {
+      if (!solver_->update(0.5 + k * s_.dt, q_, v_)) ADD_FAILURE() << "update " << k << ": " << solver_->failure();
+    }
+    return c.count();
+  }
+  const VecX<double> q_ = (VecX<double>(4) << -1.5, 0.25, 0.27, -0.23).finished();
+  const VecX<double> v_ = (VecX<double>(4) << 2.0, -1.0, 0.5, 0.3).finished();
+  CgmresSettings s_;
+  std::unique_ptr<Shooting> ocp_;
+  std::unique_ptr<Cgmres> solver_;
+};
 
 TEST_P(NoMallocUpdate, UpdatesAfterTheFirstDoNotAllocate) {
-  const auto& [formulation, mode, shooting, limited] = GetParam();
-  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
-  const double inf = std::numeric_limits<double>::infinity();
-  const TorqueLimits limits = limited ? TorqueLimits{(VecX<double>(4) << -20, -inf, -20, -inf).finished(),
-                                                     (VecX<double>(4) << 20, inf, 20, inf).finished()}
-                                      : TorqueLimits{};
-  Shooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, limits);
-  CgmresSettings s;
-  s.shooting = shooting;
-  Cgmres solver(ocp, s);
-  const VecX<double> q = (VecX<double>(4) << -1.5, 0.25, 0.27, -0.23).finished();
-  const VecX<double> v = (VecX<double>(4) << 2.0, -1.0, 0.5, 0.3).finished();
-  solver.initialize(0.5, q, v);
-  ASSERT_TRUE(solver.update(0.5, q, v));  // the first update may size workspaces
-  long allocations = 0;
-  {
-    CountAllocations c;
-    for (int k = 1; k <= 3; ++k) ASSERT_TRUE(solver.update(0.5 + k * s.dt, q, v));
-    allocations = c.count();
-  }
-  EXPECT_EQ(allocations, 0);
+  EXPECT_EQ(allocations_of_updates([] {}), 0);
 }
 
 // a target set between updates (OcpProblem::set_target: the cost's q_ref and the torque reference
 // ID(q_ref, 0, 0) − d̂ recomputed in place) allocates nothing, nor do the updates after it
 TEST_P(NoMallocUpdate, SetTargetThenUpdateDoesNotAllocate) {
-  const auto& [formulation, mode, shooting, limited] = GetParam();
-  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
-  const double inf = std::numeric_limits<double>::infinity();
-  const TorqueLimits limits = limited ? TorqueLimits{(VecX<double>(4) << -20, -inf, -20, -inf).finished(),
-                                                     (VecX<double>(4) << 20, inf, 20, inf).finished()}
-                                      : TorqueLimits{};
-  Shooting ocp(p.model, formulation, mode, paper_weights(4), VecX<double>::Zero(4), 25, limits);
-  CgmresSettings s;
-  s.shooting = shooting;
-  Cgmres solver(ocp, s);
-  const VecX<double> q = (VecX<double>(4) << -1.5, 0.25, 0.27, -0.23).finished();
-  const VecX<double> v = (VecX<double>(4) << 2.0, -1.0, 0.5, 0.3).finished();
   const VecX<double> target = (VecX<double>(4) << 0.1, -0.2, 0.15, 0.05).finished();
-  solver.initialize(0.5, q, v);
-  ASSERT_TRUE(solver.update(0.5, q, v));  // the first update may size workspaces
-  long allocations = 0;
-  {
-    CountAllocations c;
-    ocp.problem().set_target(target);
-    for (int k = 1; k <= 3; ++k) ASSERT_TRUE(solver.update(0.5 + k * s.dt, q, v));
-    allocations = c.count();
-  }
-  EXPECT_EQ(allocations, 0);
-  EXPECT_EQ(ocp.problem().cost().q_ref(), target);
+  EXPECT_EQ(allocations_of_updates([&] { ocp_->problem().set_target(target); }), 0);
+  EXPECT_EQ(ocp_->problem().cost().q_ref(), target);
 }
 
 // the controller's own work per update (eqs. 27–28, the disturbance observer handing d̂ to the

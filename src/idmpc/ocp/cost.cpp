@@ -6,7 +6,7 @@
 namespace idmpc {
 namespace {
 
-void check(const VecX<double>& x, Eigen::Index n, const char* what, bool non_negative) {
+void check(const Eigen::Ref<const VecX<double>>& x, Eigen::Index n, const char* what, bool non_negative) {
   if (x.size() != n) {
     throw std::invalid_argument(std::string(what) + " has " + std::to_string(x.size()) +
                                 " entries, expected " + std::to_string(n) + " (one per joint)");
@@ -29,20 +29,12 @@ QuadraticCost::QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n)
 }
 
 void QuadraticCost::set_torque_reference(const In& u_ref) {
-  if (u_ref.size() != q_ref_.size()) {
-    throw std::invalid_argument("torque reference u_ref has " + std::to_string(u_ref.size()) + " entries, expected " +
-                                std::to_string(q_ref_.size()) + " (one per joint)");
-  }
-  if (!u_ref.allFinite()) throw std::invalid_argument("torque reference u_ref is not finite");
+  check(u_ref, q_ref_.size(), "torque reference u_ref", false);
   u_ref_ = u_ref;
 }
 
 void QuadraticCost::set_target(const In& q_ref) {
-  if (q_ref.size() != q_ref_.size()) {
-    throw std::invalid_argument("target q_ref has " + std::to_string(q_ref.size()) + " entries, expected " +
-                                std::to_string(q_ref_.size()) + " (one per joint)");
-  }
-  if (!q_ref.allFinite()) throw std::invalid_argument("target q_ref is not finite");
+  check(q_ref, q_ref_.size(), "target q_ref", false);
   q_ref_ = q_ref;
 }
 
