@@ -11,6 +11,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -164,6 +165,13 @@ TEST_F(MjcfTranslate, IncludedFilesAreTranslatedToo) {
 TEST_F(MjcfTranslate, TheUsersFilesAreLeftByteIdentical) {
   const std::vector<std::string> files = {"fr3_scene.xml", "fr3_translate.xml", "so_arm100_translate.xml",
                                           "mesh_arm.xml", "meshes/tetra.obj"};
+  // every entry of the fixtures' directory, files and folders
+  auto listing = [] {
+    std::set<std::string> entries;
+    for (const auto& e : fs::recursive_directory_iterator(kFixtures)) entries.insert(e.path().string());
+    return entries;
+  };
+  const std::set<std::string> entries_before = listing();
   std::vector<std::string> before;
   for (const std::string& f : files) before.push_back(slurp(kFixtures + f));
   for (const char* model : {"fr3_scene.xml", "so_arm100_translate.xml", "mesh_arm.xml"}) {
@@ -171,9 +179,7 @@ TEST_F(MjcfTranslate, TheUsersFilesAreLeftByteIdentical) {
   }
   for (std::size_t k = 0; k < files.size(); ++k) EXPECT_EQ(slurp(kFixtures + files[k]), before[k]) << files[k];
   // and nothing was added next to them
-  std::size_t entries = 0;
-  for (const auto& e : fs::recursive_directory_iterator(kFixtures)) entries += e.is_regular_file();
-  EXPECT_EQ(entries, files.size());
+  EXPECT_EQ(listing(), entries_before);
 }
 
 TEST_F(MjcfTranslate, DampratioGivesKvFromTheInertiaAtQpos0) {
