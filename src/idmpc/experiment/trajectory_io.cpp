@@ -1,0 +1,286 @@
+#include "idmpc/experiment/trajectory_io.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <system_error>
+#include <vector>
+
+namespace idmpc {
+namespace {
+
+using nlohmann::json;
+
+// a number as a user would type it
+std::string text(double x) {
+  std::ostringstream o;
+  o << x;
+  return o.str();
+}
+
+// --- CSV ---
+
+std::string_view trim(std::string_view s) {
+  const auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  while (!s.empty() && blank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && blank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+std::vector<std::string_view> split(std::string_view line) {
+  std::vector<std::string_view> fields;
+  for (;;) {
+    const std::size_t comma = line.find(',');
+    fields.push_back(trim(line.substr(0, comma)));
+    if (comma == std::string_view::npos) return fields;
+    line.remove_prefix(comma + 1);
+  }
+}
+
+enum class Parsed { kNumber, kNotANumber, kOutOfRange };
+
+// the whole field as one decimal or scientific number (optional sign), nothing else
+Parsed parse_number(std::string_view s, double& x) {
+  if (s.size() > 1 && s.front() == '+' && s[1] != '-' && s[1] != '+') s.remove_prefix(1);
+  if (s.empty()) return Parsed::kNotANumber;
+  const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), x, std::chars_format::general);
+  if (ec == std::errc::result_out_of_range) return Parsed::kOutOfRange;
+  if (ec != std::errc() || end != s.data() + s.size()) return Parsed::kNotANumber;
+  return Parsed::kNumber;
+}
+
+// --- JSON ---
+
+// typed access naming `where` and the field
+struct Fields {
+  const json& j;
+  const std::string& where;
+
+  [[noreturn]] void bad(const char* key, const std::string& expected) const {
+    throw std::invalid_argument(where + ": field '" + key + "': expected " + expected + ", got " + j.at(key).dump());
+  }
+  [[noreturn]] void missing(const char* key, const std::string& expected) const {
+    throw std::invalid_argument(where + ": missing field '" + key + "' (" + expected + ")");
+  }
+  void known(const std::set<std::string>& keys, const std::string& shape) const {
+    for (const auto& item : j.items()) {
+      if (keys.count(item.key())) continue;
+      std::string list;
+      for (const std::string& k : keys) list += (list.empty() ? "" : ", ") + k;
+      throw std::invalid_argument(where + ": unknown field '" + item.key() + "' for shape \"" + shape +
+                                  "\" (expected " + list + ")");
+    }
+  }
+  // a number, or `fallback` when absent and optional
+  double number(const char* key, const std::string& expected, bool required, double fallback = 0) const {
+    if (!j.contains(key)) {
+      if (required) missing(key, expected);
+      return fallback;
+    }
+    if (!j.at(key).is_number() || !std::isfinite(j.at(key).get<double>())) bad(key, expected);
+    return j.at(key).get<double>();
+  }
+  // exactly n numbers
+  VecX<double> vector(const char* key, int n, const std::string& expected) const {
+    if (!j.contains(key)) missing(key, expected);
+    const json& v = j.at(key);
+    if (!v.is_array() || static_cast<int>(v.size()) != n) bad(key, expected);
+    VecX<double> x(n);
+    for (int i = 0; i < n; ++i) {
+      if (!v[i].is_number() || !std::isfinite(v[i].get<double>())) bad(key, expected);
+      x[i] = v[i].get<double>();
+    }
+    return x;
+  }
+};
+
+std::string numbers(int n, const char* what) {
+  return n == 1 ? std::string("a list of 1 number (") + what + ")"
+                : "a list of " + std::to_string(n) + " numbers (" + what + ")";
+}
+
+// below this a direction counts as zero (a normal along z, a start at the centre)
+constexpr double kDegenerate = 1e-9;
+
+std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start) {
+  f.known({"shape", "radius", "frequency", "normal", "ramp", "center"}, "circle");
+  if (start.size() != 3) {
+    throw std::invalid_argument(f.where + ": field 'shape': \"circle\" needs a 3-D reference (a position), got dim " +
+                                std::to_string(start.size()));
+  }
+  const double r = f.number("radius", "a positive number [m]", true);
+  if (!(r > 0)) f.bad("radius", "a positive number [m]");
+  const double freq = f.number("frequency", "a positive number [Hz]", true);
+  if (!(freq > 0)) f.bad("frequency", "a positive number [Hz]");
+  const double ramp = f.number("ramp", "a non-negative number [s]", false, 1.0);
+  if (!(ramp >= 0)) f.bad("ramp", "a non-negative number [s]");
+  Vec3<double> n = Vec3<double>::UnitX();
+  if (f.j.contains("normal")) {
+    n = f.vector("normal", 3, "a non-zero list of 3 numbers (the plane's normal)");
+    if (!(n.norm() > 0)) f.bad("normal", "a non-zero list of 3 numbers (the plane's normal)");
+    n.normalize();
+  }
+  // e1 by default: world +z projected onto the plane (+y projected when the normal is along z)
+  const auto in_plane = [&n](const Vec3<double>& d) -> Vec3<double> { return d - n.dot(d) * n; };
+  Vec3<double> e1_default = in_plane(Vec3<double>::UnitZ());
+  if (e1_default.norm() < kDegenerate) e1_default = in_plane(Vec3<double>::UnitY());
+  e1_default.normalize();
+  const Vec3<double> p0 = start;
+  if (!f.j.contains("center")) return std::make_unique<CircleTrajectory>(p0 - r * e1_default, n, r, freq, e1_default, ramp);
+  // a given centre: e1 towards the start projected onto the plane
+  const Vec3<double> c = f.vector("center", 3, numbers(3, "x, y, z [m]"));
+  Vec3<double> e1 = in_plane(p0 - c);
+  e1 = e1.norm() < kDegenerate * std::max(1.0, r) ? e1_default : e1.normalized();
+  return std::make_unique<CircleTrajectory>(c, n, r, freq, e1, ramp);
+}
+
+std::unique_ptr<Trajectory> line(const Fields& f, const VecX<double>& start) {
+  f.known({"shape", "to", "duration", "delay"}, "line");
+  const int dim = static_cast<int>(start.size());
+  const VecX<double> to = f.vector("to", dim, numbers(dim, "the reference's dim"));
+  const double duration = f.number("duration", "a positive number [s]", true);
+  if (!(duration > 0)) f.bad("duration", "a positive number [s]");
+  const double delay = f.number("delay", "a non-negative number [s]", false, 0.0);
+  if (!(delay >= 0)) f.bad("delay", "a non-negative number [s]");
+  MatX<double> P(dim, 2);
+  P << start, to;
+  return std::make_unique<WaypointTrajectory>(std::vector<double>{delay, delay + duration}, std::move(P));
+}
+
+std::unique_ptr<Trajectory> waypoints(const Fields& f, const VecX<double>& start) {
+  f.known({"shape", "points"}, "waypoints");
+  const char* expected = "a non-empty list of {\"t\": seconds, \"value\": [...]}";
+  if (!f.j.contains("points")) f.missing("points", expected);
+  const json& points = f.j.at("points");
+  if (!points.is_array() || points.empty()) f.bad("points", expected);
+  const int dim = static_cast<int>(start.size());
+  std::vector<double> t;
+  std::vector<VecX<double>> values;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string where = f.where + ", 'points'[" + std::to_string(i) + "]";
+    if (!points[i].is_object()) {
+      throw std::invalid_argument(where + ": expected {\"t\": seconds, \"value\": [...]}, got " + points[i].dump());
+    }
+    const Fields p{points[i], where};
+    p.known({"t", "value"}, "waypoints");
+    const double ti = p.number("t", "a non-negative number [s]", true);
+    if (!(ti >= 0)) p.bad("t", "a non-negative number [s]");
+    if (!t.empty() && !(ti > t.back())) {
+      p.bad("t", "a time after the previous point's " + text(t.back()) + " s (strictly increasing)");
+    }
+    t.push_back(ti);
+    values.push_back(p.vector("value", dim, numbers(dim, "the reference's dim")));
+  }
+  // the reference starts where it is at t = 0
+  if (t.front() > 0) {
+    t.insert(t.begin(), 0.0);
+    values.insert(values.begin(), start);
+  }
+  MatX<double> P(dim, static_cast<Eigen::Index>(values.size()));
+  for (std::size_t k = 0; k < values.size(); ++k) P.col(static_cast<Eigen::Index>(k)) = values[k];
+  return std::make_unique<WaypointTrajectory>(std::move(t), std::move(P));
+}
+
+std::unique_ptr<Trajectory> csv(const Fields& f, const VecX<double>& start, const std::string& base_dir) {
+  f.known({"shape", "file"}, "csv");
+  const char* expected = "a CSV file name, relative to the task file";
+  if (!f.j.contains("file")) f.missing("file", expected);
+  if (!f.j.at("file").is_string() || f.j.at("file").get<std::string>().empty()) f.bad("file", expected);
+  const std::filesystem::path file(f.j.at("file").get<std::string>());
+  const std::string path =
+      file.is_absolute() ? file.string() : (std::filesystem::path(base_dir) / file).lexically_normal().string();
+  try {
+    return std::make_unique<SampledTrajectory>(read_trajectory_csv(path, static_cast<int>(start.size())));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(f.where + ": field 'file': " + e.what());
+  }
+}
+
+}  // namespace
+
+SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
+  const std::string file = "trajectory file '" + path + "'";
+  if (dim < 1) throw std::invalid_argument(file + ": expected a dimension >= 1, got " + std::to_string(dim));
+  std::ifstream in(path);
+  if (!in || std::filesystem::is_directory(path)) {
+    throw std::invalid_argument(file + " cannot be read (missing or not readable)");
+  }
+  const std::size_t columns = static_cast<std::size_t>(dim) + 1;
+  const std::string expected_columns = std::to_string(columns) + " columns (time and " + std::to_string(dim) +
+                                       (dim == 1 ? " value)" : " values)");
+  std::vector<double> t;
+  std::vector<double> values;  // row after row
+  int previous_line = 0;
+  bool first = true;
+  std::string raw;
+  for (int number = 1; std::getline(in, raw); ++number) {
+    // comments, line endings and blank lines
+    std::string_view line(raw);
+    line = line.substr(0, line.find('#'));
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    if (trim(line).empty()) continue;
+    const std::string at = file + " line " + std::to_string(number);
+    const std::vector<std::string_view> fields = split(line);
+    double x = 0;
+    // a header: a first line that does not start with a number
+    const bool header = first && parse_number(fields[0], x) == Parsed::kNotANumber;
+    first = false;
+    if (fields.size() != columns) {
+      throw std::invalid_argument(at + ": expected " + expected_columns + ", got " + std::to_string(fields.size()) +
+                                  (header ? " (header)" : ""));
+    }
+    if (header) continue;
+    for (std::size_t c = 0; c < columns; ++c) {
+      const std::string field = at + ", column " + std::to_string(c + 1) + ": expected ";
+      const std::string got = ", got '" + std::string(fields[c]) + "'";
+      switch (parse_number(fields[c], x)) {
+        case Parsed::kNotANumber: throw std::invalid_argument(field + "a number" + got);
+        case Parsed::kOutOfRange: throw std::invalid_argument(field + "a number in double range" + got);
+        case Parsed::kNumber: break;
+      }
+      if (!std::isfinite(x)) throw std::invalid_argument(field + "a finite number" + got);
+      if (c == 0) {
+        if (!t.empty() && !(x > t.back())) {
+          throw std::invalid_argument(field + "a time after " + text(t.back()) + " s on line " +
+                                      std::to_string(previous_line) + " (strictly increasing)" + got);
+        }
+        t.push_back(x);
+      } else {
+        values.push_back(x);
+      }
+    }
+    previous_line = number;
+  }
+  if (in.bad()) throw std::invalid_argument(file + " cannot be read (read error)");
+  if (t.size() < 2) {
+    throw std::invalid_argument(file + ": expected at least 2 rows of samples, got " + std::to_string(t.size()));
+  }
+  MatX<double> P = Eigen::Map<const MatX<double>>(values.data(), dim, static_cast<Eigen::Index>(t.size()));
+  return SampledTrajectory(std::move(t), std::move(P));
+}
+
+std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::string& where, const VecX<double>& start,
+                                                 const std::string& base_dir) {
+  if (start.size() < 1) throw std::invalid_argument(where + ": the reference's start value is empty (dim 0)");
+  if (!start.allFinite()) throw std::invalid_argument(where + ": the reference's start value is not finite");
+  if (!j.is_object()) {
+    throw std::invalid_argument(where + ": expected an object {\"shape\": \"circle\" | \"line\" | \"waypoints\" | "
+                                        "\"csv\", ...}, got " + j.dump());
+  }
+  const Fields f{j, where};
+  const char* shapes = "\"circle\", \"line\", \"waypoints\" or \"csv\"";
+  if (!j.contains("shape")) f.missing("shape", shapes);
+  const json& shape = j.at("shape");
+  if (shape == "circle") return circle(f, start);
+  if (shape == "line") return line(f, start);
+  if (shape == "waypoints") return waypoints(f, start);
+  if (shape == "csv") return csv(f, start, base_dir);
+  f.bad("shape", shapes);
+}
+
+}  // namespace idmpc
