@@ -1,10 +1,17 @@
 // References that move: every kind's rate is the derivative of its value (central differences
 // with a tolerance from the error analysis), values and rates are continuous where the pieces
-// meet, and each kind has the shape it promises (a circle of radius r in its plane, waypoints hit
-// at rest, samples interpolated C¹, ends held at rest).
+// meet, each kind has the shape it promises (a circle of radius r in its plane, waypoints hit at
+// rest, samples interpolated C¹, ends held at rest), and sampling allocates nothing.
+//
+// The library is compiled without Eigen's runtime allocation check, so the allocation test counts
+// calls to malloc itself: the executable defines malloc, calloc and realloc over glibc's own entry
+// points, which takes precedence over libc's. Under AddressSanitizer, whose runtime owns malloc, it
+// counts through the runtime's allocation hook instead.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -12,9 +19,61 @@
 #include <vector>
 
 #include "idmpc/ocp/trajectory.hpp"
+#include "support/sanitizers.hpp"
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+void count() {
+  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
+}
+}  // namespace
+
+#if IDMPC_TEST_ASAN
+// the sanitizer runtime's hook (sanitizer/allocator_interface.h, which gcc does not install)
+extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*)(const volatile void*, std::size_t),
+                                                         void (*)(const volatile void*));
+namespace {
+void malloc_hook(const volatile void*, std::size_t) { count(); }
+void free_hook(const volatile void*) {}
+// installed before main, so before any test runs
+[[maybe_unused]] const int g_hooks_installed = __sanitizer_install_malloc_and_free_hooks(malloc_hook, free_hook);
+}  // namespace
+#else
+extern "C" {
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
+void* malloc(std::size_t size) {
+  count();
+  return __libc_malloc(size);
+}
+void* calloc(std::size_t n, std::size_t size) {
+  count();
+  return __libc_calloc(n, size);
+}
+void* realloc(void* p, std::size_t size) {
+  count();
+  return __libc_realloc(p, size);
+}
+}
+#endif
 
 namespace idmpc {
 namespace {
+
+// allocations counted over the guard's lifetime
+class CountAllocations {
+ public:
+  CountAllocations() {
+    g_allocations = 0;
+    g_counting = true;
+  }
+  ~CountAllocations() { g_counting = false; }
+  CountAllocations(const CountAllocations&) = delete;
+  CountAllocations& operator=(const CountAllocations&) = delete;
+  long count() const { return g_allocations.load(); }
+};
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kEps = std::numeric_limits<double>::epsilon();
@@ -482,6 +541,42 @@ TEST(Trajectory, CloneIsIndependentOfTheOriginal) {
       EXPECT_EQ(at(*copy, t).rate, expected[i].rate) << what << ", t = " << t;
       ++i;
     }
+  }
+}
+
+TEST(Trajectory, AllocationCounterIsArmed) {
+  long n = 0;
+  {
+    CountAllocations c;
+    VecX<double> x(7);
+    x.setZero();
+    asm volatile("" : : "g"(x.data()) : "memory");  // the vector escapes: clang may not elide it
+    n = c.count();
+  }
+  EXPECT_GE(n, 1) << "the counter must see an Eigen allocation, or the test below proves nothing";
+}
+
+TEST(Trajectory, SamplesAHorizonWithoutAllocating) {
+  std::vector<std::unique_ptr<Trajectory>> kinds;
+  kinds.push_back(std::make_unique<ConstantTrajectory>(Vec3<double>(1, 2, 3)));
+  kinds.push_back(CircleSetup().make().clone());
+  kinds.push_back(std::make_unique<WaypointTrajectory>(three_waypoints()));
+  kinds.push_back(std::make_unique<SampledTrajectory>(sampled()));
+  for (const auto& traj : kinds) {
+    // one column per stage of a horizon, as the controller holds them
+    const int N = 25;
+    MatX<double> values(traj->dim(), N + 1), rates(traj->dim(), N + 1);
+    const std::vector<double> starts = grid(-1, 5, 61);
+    long n = 0;
+    {
+      CountAllocations c;
+      for (double t0 : starts) {
+        for (int i = 0; i <= N; ++i) traj->sample(t0 + 0.02 * i, values.col(i), rates.col(i));
+      }
+      n = c.count();
+    }
+    EXPECT_EQ(n, 0) << traj->describe();
+    EXPECT_TRUE(values.allFinite() && rates.allFinite()) << traj->describe();
   }
 }
 
