@@ -89,6 +89,12 @@ TEST(ReadTrajectoryCsv, ReadsAFileWithoutHeader) {
   EXPECT_DOUBLE_EQ(rate_at(traj, 1)[0], 1);
 }
 
+TEST(ReadTrajectoryCsv, SkipsAByteOrderMark) {
+  TempDir dir;
+  const SampledTrajectory traj = read_trajectory_csv(dir.write("plan.csv", "\xEF\xBB\xBF" "0,1\n2,3\n"), 1);
+  EXPECT_EQ(traj.times(), (std::vector<double>{0, 2}));
+}
+
 TEST(ReadTrajectoryCsv, ParsesNumbersStrictly) {
   TempDir dir;
   // leading zeros are decimal, not octal
@@ -112,6 +118,8 @@ TEST(ReadTrajectoryCsv, ParsesNumbersStrictly) {
   EXPECT_EQ(error("0,1\n1,1e400\n"), file + " line 2, column 2: expected a number in double range, got '1e400'");
   // a header is only a first line; a later line of words is data
   EXPECT_EQ(error("0,1\nt,x\n"), file + " line 2, column 1: expected a number, got 't'");
+  // a first line with a number in it is data, not a header
+  EXPECT_EQ(error("O,1\n1,2\n2,3\n"), file + " line 1, column 1: expected a number, got 'O'");
 }
 
 TEST(ReadTrajectoryCsv, RejectsEachMalformedFileWithOneLine) {

@@ -221,14 +221,16 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
   for (int number = 1; std::getline(in, raw); ++number) {
     // comments, line endings and blank lines
     std::string_view line(raw);
+    if (number == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);  // a UTF-8 byte order mark
     line = line.substr(0, line.find('#'));
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (trim(line).empty()) continue;
     const std::string at = file + " line " + std::to_string(number);
     const std::vector<std::string_view> fields = split(line);
     double x = 0;
-    // a header: a first line that does not start with a number
-    const bool header = first && parse_number(fields[0], x) == Parsed::kNotANumber;
+    // a header: a first line without a number (one with a mistyped number is data, and an error)
+    bool header = first;
+    for (std::size_t c = 0; header && c < fields.size(); ++c) header = parse_number(fields[c], x) == Parsed::kNotANumber;
     first = false;
     if (fields.size() != columns) {
       throw std::invalid_argument(at + ": expected " + expected_columns + ", got " + std::to_string(fields.size()) +

@@ -13,9 +13,8 @@
 namespace idmpc {
 
 /// @brief Samples from a CSV file: each row is a time [s] then `dim` values, times strictly
-/// increasing, at least 2 rows. An optional header (a first line whose first field is not a
-/// number, with 1 + dim columns), blank lines and comments (from '#' to the end of the line) are
-/// skipped. Numbers are parsed strictly: decimal or scientific, optional sign, spaces around
+/// increasing, at least 2 rows. An optional header (a first line in which no field is a number,
+/// with 1 + dim columns), blank lines and comments (from '#' to the end of the line) are skipped. Numbers are parsed strictly: decimal or scientific, optional sign, spaces around
 /// them allowed, nothing else. Throws std::invalid_argument with one line naming the file, line
 /// and column and the bad text (not a number, not finite, wrong column count, times not
 /// increasing, too few rows, unreadable file).
