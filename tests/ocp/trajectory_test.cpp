@@ -515,6 +515,7 @@ TEST(ConstantTrajectory, HoldsItsValueAtRest) {
     EXPECT_EQ(at(traj, t).value, Vec3<double>(0.1, 0.2, 0.3));
     EXPECT_EQ(at(traj, t).rate.norm(), 0);
   }
+  expect_rate_is_derivative(traj, grid(-1, 1, 21), Bounds{0.3, 0, 0, 0});
   EXPECT_EQ(traj.describe(), "constant (0.1, 0.2, 0.3)");
   EXPECT_EQ(construction_error([] { ConstantTrajectory(VecX<double>()); }),
             "constant trajectory: value must have at least one entry, got 0");
