@@ -202,6 +202,14 @@ TEST(TrajectoryFromJson, CircleStartDirectionIsWorldZInThePlane) {
   const auto flat = from_json(R"({"shape": "circle", "radius": 0.1, "frequency": 1, "normal": [0, 0, -1]})", kStart);
   EXPECT_EQ(as_circle(flat).e1(), Vec3<double>::UnitY());
   EXPECT_LT((value_at(*flat, 0) - kStart).norm(), 1e-15);
+  // a normal all but along z: e1 from the short projection of +z, still perpendicular to it
+  for (const char* normal : {"[1e-9, 0, 1]", "[2e-9, 1e-9, -1]", "[1e-7, 0, 1]"}) {
+    const auto steep = from_json(std::string(R"({"shape": "circle", "radius": 0.1, "frequency": 1, "normal": )") +
+                                     normal + "}",
+                                 kStart);
+    EXPECT_LT(std::abs(as_circle(steep).e1().dot(as_circle(steep).normal())), 1e-15) << normal;
+    EXPECT_LT((value_at(*steep, 0) - kStart).norm(), 1e-15) << normal;
+  }
 }
 
 TEST(TrajectoryFromJson, CircleWithACentreStartsTowardsTheStart) {

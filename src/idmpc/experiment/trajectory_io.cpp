@@ -125,17 +125,20 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start) {
     if (!(n.norm() > 0)) f.bad("normal", "a non-zero list of 3 numbers (the plane's normal)");
     n.normalize();
   }
-  // e1 by default: world +z projected onto the plane (+y projected when the normal is along z)
+  // a direction's part in the plane; projected twice once normalized, so that a short part
+  // (a direction nearly along n) is as perpendicular to n as a long one
   const auto in_plane = [&n](const Vec3<double>& d) -> Vec3<double> { return d - n.dot(d) * n; };
-  Vec3<double> e1_default = in_plane(Vec3<double>::UnitZ());
-  if (e1_default.norm() < kDegenerate) e1_default = in_plane(Vec3<double>::UnitY());
-  e1_default.normalize();
+  const auto unit_in_plane = [&in_plane](const Vec3<double>& d) -> Vec3<double> {
+    return in_plane(in_plane(d).normalized()).normalized();
+  };
+  // e1 by default: world +z projected onto the plane (+y when the normal is along z)
+  const Vec3<double> e1_default = unit_in_plane(
+      in_plane(Vec3<double>::UnitZ()).norm() < kDegenerate ? Vec3<double>::UnitY() : Vec3<double>::UnitZ());
   const Vec3<double> p0 = start;
   if (!f.j.contains("center")) return std::make_unique<CircleTrajectory>(p0 - r * e1_default, n, r, freq, e1_default, ramp);
   // a given centre: e1 towards the start projected onto the plane
   const Vec3<double> c = f.vector("center", 3, numbers(3, "x, y, z [m]"));
-  Vec3<double> e1 = in_plane(p0 - c);
-  e1 = e1.norm() < kDegenerate * std::max(1.0, r) ? e1_default : e1.normalized();
+  const Vec3<double> e1 = in_plane(p0 - c).norm() < kDegenerate * std::max(1.0, r) ? e1_default : unit_in_plane(p0 - c);
   return std::make_unique<CircleTrajectory>(c, n, r, freq, e1, ramp);
 }
 
