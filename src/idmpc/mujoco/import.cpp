@@ -475,6 +475,42 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
   return out;
 }
 
+Frame import_frame(const mjModel* m, const std::string& name, const std::string& source) {
+  require_one_dof_joints(m, source);
+  require_finite(m, source);
+  const int site = mj_name2id(m, mjOBJ_SITE, name.c_str());
+  const int body = site >= 0 ? m->site_bodyid[site] : mj_name2id(m, mjOBJ_BODY, name.c_str());
+  if (body < 0) {
+    std::string sites;
+    for (int s = 0; s < m->nsite; ++s) {
+      const char* site_name = mj_id2name(m, mjOBJ_SITE, s);
+      if (site_name && site_name[0]) sites += (sites.empty() ? "" : ", ") + std::string(site_name);
+    }
+    throw std::invalid_argument("model '" + source + "' has no site or body '" + name + "' (" +
+                                (sites.empty() ? std::string("it has no named sites") : "sites: " + sites) + ")");
+  }
+  const LinkTree tree = link_tree(m, source);
+  Frame frame;
+  frame.link = tree.link_of_body[body];
+  frame.placement = tree.body_in_link[body];
+  if (site < 0) {
+    frame.name = "body '" + name + "'";
+    return frame;
+  }
+  frame.name = "site '" + name + "'";
+  if (!finite(m->site_pos + 3 * site, 3) || !finite(m->site_quat + 4 * site, 4)) {
+    throw std::invalid_argument(frame.name + " in '" + source + "' has a non-finite placement (pos " +
+                                numbers(m->site_pos + 3 * site, 3) + ", quat " + numbers(m->site_quat + 4 * site, 4) +
+                                "): expected finite numbers");
+  }
+  // site placement in its body's frame, as a body's in its parent's
+  Transform<double> T_site;
+  T_site.E = rotation(m->site_quat + 4 * site).transpose();
+  T_site.r = vec3(m->site_pos + 3 * site);
+  frame.placement = T_site * frame.placement;
+  return frame;
+}
+
 VecX<double> keyframe_qpos(const mjModel* m, const std::string& name, const std::string& source) {
   const int k = mj_name2id(m, mjOBJ_KEY, name.c_str());
   if (k < 0) {
