@@ -35,9 +35,10 @@ template <typename S> class FrameKinematics {
     S_W_.resize(path_.size());
   }
 
-  /// @brief World placement of the frame at joint positions q (size n), read back through
-  /// position() and rotation(). Also keeps each ancestor's motion subspace in world
-  /// coordinates, which jacobian() and add_jacobian_transpose_times() read: call compute first.
+  /// @brief World placement of the frame at joint positions q (size n; `model` is the one the
+  /// workspace was made for), read back through position() and rotation(). Also keeps each
+  /// ancestor's motion subspace in world coordinates, which jacobian() and
+  /// add_jacobian_transpose_times() read: call compute first.
   template <typename Q> void compute(const Model& model, const Eigen::MatrixBase<Q>& q) {
     IDMPC_DEBUG_CHECK(model.n == n_ && q.size() == n_, "FrameKinematics::compute: q must have size model.n");
     // world → link down the ancestor path, S_j in world coordinates (at the world origin)
