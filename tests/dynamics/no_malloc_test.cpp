@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/spatial/pack.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 
@@ -91,6 +92,25 @@ TEST_P(NoMallocTest, AlgorithmsDoNotAllocateAfterDataConstruction) {
   guarded("minv_matrix", [&] { minv_matrix(model, data, q); });
   guarded("rnea_derivatives", [&] { rnea_derivatives(model, data, q, v, a); });
   guarded("aba_derivatives", [&] { aba_derivatives(model, data, q, v, tau); });
+  // frame kinematics of a point on the last link, in doubles and in SIMD lanes
+  Frame frame{"tool", n - 1, {}};
+  frame.placement.r = Vec3<double>(0.1, 0.2, 0.3);
+  FrameKinematics<double> fk(model, frame);
+  FrameKinematics<StagePack> fk_lanes(model, frame);
+  FrameKinematics<double>::Jacobian J(6, n);
+  FrameKinematics<StagePack>::Jacobian J_lanes(6, n);
+  const VecX<StagePack> q_lanes = q.cast<StagePack>();
+  VecX<StagePack> g_lanes = VecX<StagePack>::Constant(n, StagePack(0.0));
+  const Vec3<double> f(1, 2, 3);
+  const Vec3<StagePack> f_lanes = f.cast<StagePack>();
+  guarded("FrameKinematics::compute", [&] { fk.compute(model, q); });
+  guarded("FrameKinematics::jacobian", [&] { fk.jacobian(J); });
+  guarded("FrameKinematics::add_jacobian_transpose_times", [&] { fk.add_jacobian_transpose_times(f, f, x); });
+  guarded("FrameKinematics<StagePack>::compute", [&] { fk_lanes.compute(model, q_lanes); });
+  guarded("FrameKinematics<StagePack>::jacobian", [&] { fk_lanes.jacobian(J_lanes); });
+  guarded("FrameKinematics<StagePack>::add_jacobian_transpose_times",
+          [&] { fk_lanes.add_jacobian_transpose_times(f_lanes, f_lanes, g_lanes); });
+  EXPECT_GT(J.norm(), 0.0);
   // the guarded calls did real work
   EXPECT_TRUE(data.tau.allFinite() && data.qdd.allFinite() && data.Minv.allFinite() &&
               data.y_ltdl.allFinite());

@@ -27,6 +27,8 @@ template void minv_apply_columns(const Model&, Data&, int);
 template const MatX<double>& minv_matrix_after_aba(const Model&, Data&);
 template const MatX<double>& minv_matrix(const Model&, Data&, const Eigen::MatrixBase<Vd>&);
 template struct DataTpl<double>;
+template class FrameKinematics<double>;
+template void FrameKinematics<double>::compute(const Model&, const Eigen::MatrixBase<Vd>&);
 
 }  // namespace idmpc
 
@@ -45,4 +47,6 @@ template void rnea_derivatives(const Model&, DataTpl<StagePack>&, const Eigen::M
                                const Eigen::MatrixBase<Vp>&, const Eigen::MatrixBase<Vp>&);
 template void aba_derivatives_after_aba(const Model&, DataTpl<StagePack>&, const Eigen::MatrixBase<Vp>&,
                                         const Eigen::MatrixBase<Vp>&);
+template class FrameKinematics<StagePack>;
+template void FrameKinematics<StagePack>::compute(const Model&, const Eigen::MatrixBase<Vp>&);
 }  // namespace idmpc

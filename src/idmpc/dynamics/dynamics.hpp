@@ -5,6 +5,7 @@
 #include "idmpc/dynamics/aba.hpp"
 #include "idmpc/dynamics/aba_derivatives.hpp"
 #include "idmpc/dynamics/crba.hpp"
+#include "idmpc/dynamics/kinematics.hpp"
 #include "idmpc/dynamics/ltdl.hpp"
 #include "idmpc/dynamics/minv.hpp"
 #include "idmpc/dynamics/rnea.hpp"

@@ -93,6 +93,66 @@ void require_finite(const mjModel* m, const std::string& source) {
   require(finite(m->opt.gravity, 3), "the model", "gravity", m->opt.gravity, 3);
 }
 
+// hinge and slide joints only, each one dof
+void require_one_dof_joints(const mjModel* m, const std::string& source) {
+  for (int j = 0; j < m->njnt; ++j) {
+    const int type = m->jnt_type[j];
+    if (type == mjJNT_BALL || type == mjJNT_FREE) {
+      throw std::invalid_argument(joint_label(m, j) + " in '" + source + "' is a " +
+                                  (type == mjJNT_BALL ? "ball" : "free") +
+                                  " joint: only hinge and slide joints are supported");
+    }
+  }
+  if (m->nq != m->nv) {
+    throw std::invalid_argument("model '" + source + "' has nq = " + std::to_string(m->nq) +
+                                " but nv = " + std::to_string(m->nv) + ": expected 1-DoF joints");
+  }
+}
+
+// the links a model's joints make (one per dof, in MuJoCo's dof order) and where each body sits
+// on them; joints of one body compose, jointless bodies are welded to their parent's link
+struct LinkTree {
+  std::vector<int> parent;                     // per dof: parent link, −1 for the base
+  std::vector<Transform<double>> X_tree;       // per dof: parent link frame → link frame at qpos0
+  std::vector<int> link_of_body;               // per body: the link it is rigidly attached to
+  std::vector<Transform<double>> body_in_link; // per body: that link's frame → body frame
+};
+
+LinkTree link_tree(const mjModel* m, const std::string& source) {
+  LinkTree tree;
+  tree.parent.reserve(m->nv);
+  tree.X_tree.reserve(m->nv);
+  tree.link_of_body.assign(m->nbody, -1);
+  tree.body_in_link.resize(m->nbody);
+  for (int b = 1; b < m->nbody; ++b) {
+    const int pb = m->body_parentid[b];
+    // body placement in its parent's frame: coordinates map by Rᵀ, origin at body_pos
+    Transform<double> T_body;
+    T_body.E = rotation(m->body_quat + 4 * b).transpose();
+    T_body.r = vec3(m->body_pos + 3 * b);
+    const Transform<double> pre = T_body * tree.body_in_link[pb];
+    int link = tree.link_of_body[pb];
+    Vec3<double> prev_anchor = Vec3<double>::Zero();
+    for (int k = 0; k < m->body_jntnum[b]; ++k) {
+      const int j = m->body_jntadr[b] + k;
+      const int i = m->jnt_dofadr[j];
+      if (i != static_cast<int>(tree.parent.size())) {
+        throw std::invalid_argument("model '" + source + "': dofs are not in body order at " +
+                                    joint_label(m, j));
+      }
+      // link frame: the body frame moved to the joint anchor; joints of one body compose
+      const Vec3<double> anchor = vec3(m->jnt_pos + 3 * j);
+      tree.X_tree.push_back(k == 0 ? translation(anchor) * pre : translation(anchor - prev_anchor));
+      tree.parent.push_back(link);
+      link = i;
+      prev_anchor = anchor;
+    }
+    tree.link_of_body[b] = link;
+    tree.body_in_link[b] = m->body_jntnum[b] > 0 ? translation(-prev_anchor) : pre;
+  }
+  return tree;
+}
+
 // "'a1', 'a2'" or, for more than three, "'a1'…'a7' (7)"
 std::string name_list(const std::vector<std::string>& names) {
   if (names.size() > 3) return "'" + names.front() + "'…'" + names.back() + "' (" + std::to_string(names.size()) + ")";
@@ -380,66 +440,32 @@ std::string Actuation::summary() const {
 }
 
 ImportedModel import_model(const mjModel* m, const std::string& source, const ImportOptions& options) {
-  // joints: hinge and slide only, each one dof
-  for (int j = 0; j < m->njnt; ++j) {
-    const int type = m->jnt_type[j];
-    if (type == mjJNT_BALL || type == mjJNT_FREE) {
-      throw std::invalid_argument(joint_label(m, j) + " in '" + source + "' is a " +
-                                  (type == mjJNT_BALL ? "ball" : "free") +
-                                  " joint: only hinge and slide joints are supported");
-    }
-  }
+  require_one_dof_joints(m, source);
   if (m->nv == 0) throw std::invalid_argument("model '" + source + "' has no joints");
   require_finite(m, source);
-  if (m->nq != m->nv) {
-    throw std::invalid_argument("model '" + source + "' has nq = " + std::to_string(m->nq) +
-                                " but nv = " + std::to_string(m->nv) + ": expected 1-DoF joints");
-  }
 
   // one link per dof, in MuJoCo's dof order
-  std::vector<Link> links;
-  links.reserve(m->nv);
-
-  // per body: the link its frame is rigidly attached to and that link's frame → body frame
-  std::vector<int> link_of_body(m->nbody, -1);
-  std::vector<Transform<double>> body_in_link(m->nbody);
+  const LinkTree tree = link_tree(m, source);
+  std::vector<Link> links(m->nv);
   const bool passive = !(m->opt.disableflags & mjDSBL_PASSIVE);
+  for (int j = 0; j < m->njnt; ++j) {
+    const int i = m->jnt_dofadr[j];
+    Link& l = links[i];
+    l.X_tree = tree.X_tree[i];
+    l.parent = tree.parent[i];
+    l.joint_type = m->jnt_type[j] == mjJNT_HINGE ? JointType::kRevolute : JointType::kPrismatic;
+    l.axis = vec3(m->jnt_axis + 3 * j).normalized();
+    l.joint_name = object_name(m, mjOBJ_JOINT, j);
+    l.q_ref = m->qpos0[m->jnt_qposadr[j]];
+    l.armature = m->dof_armature[i];
+    l.damping = passive ? m->dof_damping[i] : 0.0;
+    l.stiffness = passive ? m->jnt_stiffness[j] : 0.0;
+    l.q_spring = m->qpos_spring[m->jnt_qposadr[j]];
+  }
+  // welded bodies merge into the link they hang from; those on the base carry nothing
   for (int b = 1; b < m->nbody; ++b) {
-    const int pb = m->body_parentid[b];
-    // body placement in its parent's frame: coordinates map by Rᵀ, origin at body_pos
-    Transform<double> T_body;
-    T_body.E = rotation(m->body_quat + 4 * b).transpose();
-    T_body.r = vec3(m->body_pos + 3 * b);
-    Transform<double> pre = T_body * body_in_link[pb];
-    int link = link_of_body[pb];
-    Vec3<double> prev_anchor = Vec3<double>::Zero();
-    for (int k = 0; k < m->body_jntnum[b]; ++k) {
-      const int j = m->body_jntadr[b] + k;
-      const int i = m->jnt_dofadr[j];
-      if (i != static_cast<int>(links.size())) {
-        throw std::invalid_argument("model '" + source + "': dofs are not in body order at " +
-                                    joint_label(m, j));
-      }
-      // link frame: the body frame moved to the joint anchor; joints of one body compose
-      const Vec3<double> anchor = vec3(m->jnt_pos + 3 * j);
-      Link& l = links.emplace_back();
-      l.X_tree = k == 0 ? translation(anchor) * pre : translation(anchor - prev_anchor);
-      l.parent = link;
-      l.joint_type = m->jnt_type[j] == mjJNT_HINGE ? JointType::kRevolute : JointType::kPrismatic;
-      l.axis = vec3(m->jnt_axis + 3 * j).normalized();
-      l.joint_name = object_name(m, mjOBJ_JOINT, j);
-      l.q_ref = m->qpos0[m->jnt_qposadr[j]];
-      l.armature = m->dof_armature[i];
-      l.damping = passive ? m->dof_damping[i] : 0.0;
-      l.stiffness = passive ? m->jnt_stiffness[j] : 0.0;
-      l.q_spring = m->qpos_spring[m->jnt_qposadr[j]];
-      link = i;
-      prev_anchor = anchor;
-    }
-    link_of_body[b] = link;
-    body_in_link[b] = m->body_jntnum[b] > 0 ? translation(-prev_anchor) : pre;
-    // welded bodies merge into the link they hang from; those on the base carry nothing
-    if (link >= 0) links[link].I += body_inertia(m, b).transformed_to_parent(body_in_link[b]);
+    const int link = tree.link_of_body[b];
+    if (link >= 0) links[link].I += body_inertia(m, b).transformed_to_parent(tree.body_in_link[b]);
   }
   const Vec3<double> gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
                                                                       : vec3(m->opt.gravity);
@@ -447,6 +473,42 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
   out.unmodeled = unmodeled_features(m);
   out.notices = actuation_notices(m, out.actuation);
   return out;
+}
+
+Frame import_frame(const mjModel* m, const std::string& name, const std::string& source) {
+  require_one_dof_joints(m, source);
+  require_finite(m, source);
+  const int site = mj_name2id(m, mjOBJ_SITE, name.c_str());
+  const int body = site >= 0 ? m->site_bodyid[site] : mj_name2id(m, mjOBJ_BODY, name.c_str());
+  if (body < 0) {
+    std::string sites;
+    for (int s = 0; s < m->nsite; ++s) {
+      const char* site_name = mj_id2name(m, mjOBJ_SITE, s);
+      if (site_name && site_name[0]) sites += (sites.empty() ? "" : ", ") + std::string(site_name);
+    }
+    throw std::invalid_argument("model '" + source + "' has no site or body '" + name + "' (" +
+                                (sites.empty() ? std::string("it has no named sites") : "sites: " + sites) + ")");
+  }
+  const LinkTree tree = link_tree(m, source);
+  Frame frame;
+  frame.link = tree.link_of_body[body];
+  frame.placement = tree.body_in_link[body];
+  if (site < 0) {
+    frame.name = "body '" + name + "'";
+    return frame;
+  }
+  frame.name = "site '" + name + "'";
+  if (!finite(m->site_pos + 3 * site, 3) || !finite(m->site_quat + 4 * site, 4)) {
+    throw std::invalid_argument(frame.name + " in '" + source + "' has a non-finite placement (pos " +
+                                numbers(m->site_pos + 3 * site, 3) + ", quat " + numbers(m->site_quat + 4 * site, 4) +
+                                "): expected finite numbers");
+  }
+  // site placement in its body's frame, as a body's in its parent's
+  Transform<double> T_site;
+  T_site.E = rotation(m->site_quat + 4 * site).transpose();
+  T_site.r = vec3(m->site_pos + 3 * site);
+  frame.placement = T_site * frame.placement;
+  return frame;
 }
 
 VecX<double> keyframe_qpos(const mjModel* m, const std::string& name, const std::string& source) {

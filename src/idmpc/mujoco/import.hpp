@@ -7,6 +7,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "idmpc/model/frame.hpp"
 #include "idmpc/model/model.hpp"
 
 namespace idmpc::mj {
@@ -72,6 +73,13 @@ struct ImportedModel {
 /// and actuate_every_joint confirms it. `source` names the file in messages.
 ImportedModel import_model(const mjModel* m, const std::string& source,
                            const ImportOptions& options = {});
+
+/// @brief The Frame of the site called `name`, or else of the body called `name` ("world": the
+/// base), on the links import_model(m, …) makes: a site's placement is its body's composed with
+/// site_pos/site_quat, a body's is where its frame sits on the link it is rigidly attached to.
+/// Throws std::invalid_argument naming `source` and `name`, with the model's site names, if
+/// there is neither; or for what import_model refuses in the joints, or a non-finite placement.
+Frame import_frame(const mjModel* m, const std::string& name, const std::string& source);
 
 /// @brief qpos of the keyframe called `name`; throws std::invalid_argument naming the model if
 /// it has none.
