@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <random>
 #include <stdexcept>
@@ -18,6 +19,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/ocp/trajectory.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 
@@ -67,15 +69,27 @@ Bounds bounds_of(const TorqueLimits& limits, const VecX<double>& R, const VecX<d
 // c_k = (u_j − ū_k)² + d_k² − (Δ_k/2)² for the bounded joints j = joint[k]. With a disturbance
 // estimate d̂ (DESIGN §10; empty: none) the model's joint torque is u + d̂: FD rolls out
 // a_i = FD(q_i, v_i, u_i + d̂), ID computes u_i = ID(q_i, v_i, a_i) − d̂ (u_ref is the caller's).
-double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, const VecX<double>& q_ref,
-            const VecX<double>& u_ref, const Bounds& bounds, const VecX<double>& U, VecX<double> q,
-            VecX<double> v, double T, int N, const VecX<double>& d_hat = VecX<double>()) {
+//
+// With `moving` (the references of a moving target and a frame cost), stage i (N: the terminal
+// cost) sees its own q_ref, v_ref and u_ref, and adds `moving->frame(i, q_i)`.
+struct StageReferences {
+  std::function<void(int i, VecX<double>& q_ref, VecX<double>& v_ref, VecX<double>& u_ref)> joint;
+  std::function<double(int i, const VecX<double>& q)> frame;
+};
+
+double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, const VecX<double>& q_ref_fixed,
+            const VecX<double>& u_ref_fixed, const Bounds& bounds, const VecX<double>& U, VecX<double> q,
+            VecX<double> v, double T, int N, const VecX<double>& d_hat = VecX<double>(),
+            const StageReferences* moving = nullptr) {
   const int n = model.n, m = bounds.m(), sd = n + 2 * m;
   const VecX<double> dist = d_hat.size() == 0 ? VecX<double>::Zero(n) : d_hat;
   const double dtau = T / N;
-  auto phi = [&](const VecX<double>& qi, const VecX<double>& vi) {
-    const VecX<double> e = qi - q_ref;
-    return 0.5 * e.dot(w.Qq.cwiseProduct(e)) + 0.5 * vi.dot(w.Qv.cwiseProduct(vi));
+  VecX<double> q_ref = q_ref_fixed, v_ref = VecX<double>::Zero(n), u_ref = u_ref_fixed;
+  auto phi = [&](int i, const VecX<double>& qi, const VecX<double>& vi) {
+    if (moving) moving->joint(i, q_ref, v_ref, u_ref);
+    const VecX<double> e = qi - q_ref, ev = vi - v_ref;
+    return 0.5 * e.dot(w.Qq.cwiseProduct(e)) + 0.5 * ev.dot(w.Qv.cwiseProduct(ev)) +
+           (moving ? moving->frame(i, qi) : 0.0);
   };
   double J = 0;
   for (int i = 0; i < N; ++i) {
@@ -87,8 +101,9 @@ double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, 
       a = U.segment(i * sd, n);
       u = rnea(model, data, q, v, a) - dist;
     }
+    double L = phi(i, q, v);  // sets stage i's u_ref
     const VecX<double> e = u - u_ref;
-    double L = phi(q, v) + 0.5 * e.dot(w.R.cwiseProduct(e));
+    L += 0.5 * e.dot(w.R.cwiseProduct(e));
     if (f == Formulation::kInverseDynamics) L += 0.5 * a.dot(w.Qa.cwiseProduct(a));
     for (int k = 0; k < m; ++k) {
       const double d = U[i * sd + n + k], rho = U[i * sd + n + m + k];
@@ -101,7 +116,7 @@ double cost(const Model& model, Data& data, Formulation f, const OcpWeights& w, 
     v += dtau * a;
     q = q_next;
   }
-  return J + phi(q, v);
+  return J + phi(N, q, v);
 }
 
 // the torque that holds q_ref: gravity and springs at rest
@@ -459,6 +474,115 @@ TEST_P(OcpGradient, WithFrictionAndDisturbanceResidualIsTheGradientOfTheCost) {
         EXPECT_LE(std::sqrt(e.v.squaredNorm()), 1e-10 * std::max(1.0, rollout.v.norm())) << "velocity defects";
       }
     }
+  }
+}
+
+// A moving target, independent of the library's shapes: value c + a∘sin(ωt + φ), rate aω∘cos(ωt + φ).
+class SineTrajectory final : public Trajectory {
+ public:
+  SineTrajectory(VecX<double> c, VecX<double> a, double omega, VecX<double> phase)
+      : c_(std::move(c)), a_(std::move(a)), omega_(omega), phase_(std::move(phase)) {}
+  std::unique_ptr<Trajectory> clone() const override { return std::make_unique<SineTrajectory>(*this); }
+  int dim() const override { return static_cast<int>(c_.size()); }
+  void sample(double t, Eigen::Ref<VecX<double>> value, Eigen::Ref<VecX<double>> rate) const override {
+    const VecX<double> arg = (omega_ * t + phase_.array()).matrix();
+    value = c_ + a_.cwiseProduct(VecX<double>(arg.array().sin()));
+    rate = omega_ * a_.cwiseProduct(VecX<double>(arg.array().cos()));
+  }
+  std::string describe() const override { return "sine"; }
+
+ private:
+  VecX<double> c_, a_;
+  double omega_;
+  VecX<double> phase_;
+};
+
+SineTrajectory random_sine(std::mt19937& rng, int dim, double centre, double amplitude) {
+  return SineTrajectory(random_vector(rng, dim, centre), random_vector(rng, dim, 0.2 * amplitude, amplitude),
+                        std::uniform_real_distribution<double>(1.0, 4.0)(rng), random_vector(rng, dim, 3.0));
+}
+
+// A frame target and references that move (StageTerms): stage i's joint target, its rate and
+// torque reference are those at t0 + i·Δτ, the frame's position target too, and the frame cost
+// ½(p − p_ref)ᵀdiag(w_p)(p − p_ref) + w_o(1 − cos θ) is evaluated here with MuJoCo's kinematics
+// (mj_kinematics: the body's xpos and xmat) — F is the gradient of that cost, in both shooting
+// schemes, stages in lanes and stage by stage.
+TEST_P(OcpGradient, WithAFrameTargetAndMovingReferencesResidualIsTheGradient) {
+  const auto& [path, formulation_binding, mode] = GetParam();
+  const Formulation formulation = formulation_binding;
+  const Problem p = load_problem(path);
+  const bool arm4 = path.find("arm4") != std::string::npos;
+  const std::string body = arm4 ? "link3" : "right_hand";
+  const int b = mj_name2id(p.m.get(), mjOBJ_BODY, body.c_str());
+  ASSERT_GE(b, 0);
+  const int n = p.model.n, N = 6;
+  const double T = 0.3, t0 = 0.7, dtau = T / N;
+  Data data(p.model), ref_data(p.model);
+  mj::DataPtr d = mj::make_data(p.m.get());
+  std::mt19937 rng(21);
+  const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2),
+                     random_vector(rng, n, 1e-3, 1e-2), random_vector(rng, n, 1e-4, 1e-3)};
+  FrameTarget target;
+  target.frame = mj::import_frame(p.m.get(), body, path);
+  target.position_weight = random_vector(rng, 3, 2.0, 8.0);
+  target.orientation_weight = 3.0;
+  target.rotation = Eigen::AngleAxisd(1.0, Vec3<double>(random_vector(rng, 3, 1.0).normalized())).toRotationMatrix();
+  const auto joint = std::make_shared<SineTrajectory>(random_sine(rng, n, 0.5, 0.4));
+  const auto frame = std::make_shared<SineTrajectory>(random_sine(rng, 3, 1.0, 0.3));
+  const VecX<double> d_hat = random_vector(rng, n, 0.5);
+  const VecX<double> q0 = random_vector(rng, n, -2.0, 2.0), v0 = random_vector(rng, n, -1.0, 1.0);
+  const VecX<double> A = random_vector(rng, N * n, -3.0, 3.0);
+  const VecX<double> U =
+      formulation == Formulation::kInverseDynamics ? A : torques_of(p.model, data, A, q0, v0, T, N, d_hat);
+
+  StageReferences moving;
+  moving.joint = [&](int i, VecX<double>& q_ref, VecX<double>& v_ref, VecX<double>& u_ref) {
+    joint->sample(t0 + i * dtau, q_ref, v_ref);
+    u_ref = holding_torque(p.model, ref_data, q_ref) - d_hat;
+  };
+  moving.frame = [&](int i, const VecX<double>& q) {
+    VecX<double> p_ref(3), rate(3);
+    frame->sample(t0 + i * dtau, p_ref, rate);
+    Eigen::Map<VecX<double>>(d->qpos, n) = q;
+    mj_kinematics(p.m.get(), d.get());
+    const Vec3<double> e = Eigen::Map<const Vec3<double>>(d->xpos + 3 * b) - p_ref;
+    const Mat3<double> R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(d->xmat + 9 * b);
+    return 0.5 * e.dot(target.position_weight.cwiseProduct(e)) +
+           0.5 * target.orientation_weight * (3.0 - (target.rotation.transpose() * R).trace());
+  };
+  const VecX<double> unused = VecX<double>::Zero(n);
+  const MatX<double> grad = central_difference_jacobian(
+      [&](const VecX<double>& X) {
+        return VecX<double>::Constant(
+            1, cost(p.model, data, formulation, w, unused, unused, Bounds{}, X, q0, v0, T, N, d_hat, &moving));
+      },
+      U);
+  const VecX<double> expected = grad.row(0).transpose() / dtau;
+  for (bool lanes : {true, false}) {
+    SCOPED_TRACE(lanes ? "lanes" : "stage by stage");
+    Shooting ocp(p.model, formulation, mode, w, unused, N);
+    ocp.set_stage_batching(lanes);
+    ocp.problem().set_disturbance(d_hat);
+    ocp.problem().set_frame_target(target);
+    ocp.problem().set_frame_trajectory(frame);
+    ocp.problem().set_joint_trajectory(joint);
+    ocp.set_time(t0);
+    VecX<double> F(N * n);
+    ocp.residual(U, q0, v0, T, F);
+    EXPECT_LE((F - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kGradientMatch)
+        << "F        " << F.transpose() << "\nexpected " << expected.transpose();
+    // multiple shooting at the rollout: zero defects and the same gradient
+    const ShootingTrajectory rollout = ocp.trajectory();
+    ShootingDefects e;
+    e.resize(n, N);
+    VecX<double> Fm(N * n);
+    ocp.residual_at(U, rollout, q0, v0, T, Fm, e);
+    EXPECT_LE((Fm - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), kGradientMatch)
+        << "multiple shooting";
+    // the references are those of the time set: later, another residual
+    ocp.set_time(t0 + 0.1);
+    ocp.residual(U, q0, v0, T, F);
+    EXPECT_GT((F - expected).cwiseAbs().maxCoeff() / expected.cwiseAbs().maxCoeff(), 1e-3) << "at t0 + 0.1";
   }
 }
 

@@ -1,5 +1,6 @@
 #include "idmpc/ocp/cost.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +27,13 @@ QuadraticCost::QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n)
   check(w_.Qv, n, "weight Qv", true);
   check(w_.Qa, n, "weight Qa", true);
   check(w_.R, n, "weight R", true);
+}
+
+double rotation_angle(const Mat3<double>& R, const Mat3<double>& R_ref) {
+  // atan2 of sin θ = ½‖vee(A − Aᵀ)‖ and cos θ = ½(tr A − 1), A = R_refᵀR: accurate at any angle
+  const Mat3<double> A = R_ref.transpose() * R;
+  const Vec3<double> s(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
+  return std::atan2(0.5 * s.norm(), 0.5 * (A.trace() - 1.0));
 }
 
 void QuadraticCost::set_torque_reference(const In& u_ref) {

@@ -143,14 +143,14 @@ void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
   const Model& model = terms.model();
   auto hu = F.head(model.n);
   // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = w + μ
-  terms.torque_gradient(u, rho, w_);
+  terms.torque_gradient(i, u, rho, w_);
   if constexpr (kCostateLanes) {
     if (lanes_stamp_.current(i, ev)) {
       // at these costates, from costate_lanes
       hu = w_ + mu_all_.col(i);
       gq_ = -gq_all_.col(i);
       gv_ = -gv_all_.col(i);
-      terms.close_stage(q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+      terms.close_stage(i, q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
       return;
     }
   }
@@ -179,7 +179,7 @@ void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
     hu = w_;
     hu.noalias() += Minv->transpose() * gmm_next;
   }
-  terms.close_stage(q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+  terms.close_stage(i, q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
 }
 
 template <DerivativeMode M, bool Lanes> std::size_t FdStages<M, Lanes>::workspace_bytes() const {

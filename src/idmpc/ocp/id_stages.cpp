@@ -77,7 +77,7 @@ void IdStages<M, Lanes>::lanes(const StageTerms& terms, Evaluation ev, int i0, i
   // the actuators' torques u = τ − d̂
   const VecX<double>& d_hat = terms.disturbance();
   for (int j = 0; j < n; ++j) ul_[j] = lanes_.tau[j] - d_hat[j];
-  terms.torque_gradient(ul_, rl_, wl_);
+  terms.torque_gradient(i0, count, ul_, rl_, wl_);
   if constexpr (kMatrix) {
     // (∂τ/∂q)ᵀw, (∂τ/∂v)ᵀw and M w (M symmetric) column by column: Eigen's products cannot take
     // SIMD packs
@@ -115,7 +115,7 @@ void IdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
     hu = gmm_next + la_ + Mw_all_.col(i);
   } else {
     Data& data = stage_[static_cast<size_t>(i)];
-    terms.torque_gradient(u, rho, w_);
+    terms.torque_gradient(i, u, rho, w_);
     if constexpr (kMatrix) {
       // ∂τ/∂q, ∂τ/∂v and M are in data from dynamics
       hu = gmm_next + la_;
@@ -131,7 +131,7 @@ void IdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
       hu = gmm_next + la_ + data.g_a;
     }
   }
-  terms.close_stage(q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+  terms.close_stage(i, q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
 }
 
 template <DerivativeMode M, bool Lanes> std::size_t IdStages<M, Lanes>::workspace_bytes() const {

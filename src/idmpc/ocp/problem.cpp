@@ -29,7 +29,7 @@ int OcpProblem::checked_n(const std::shared_ptr<const Model>& model) {
 
 OcpProblem::OcpProblem(std::shared_ptr<const Model> model, Formulation formulation, DerivativeMode mode,
                        QuadraticCost cost, int N, const TorqueLimits& limits)
-    : terms_(std::move(model), std::move(cost), limits),
+    : terms_(std::move(model), std::move(cost), limits, N, mode == DerivativeMode::kMatrix),
       formulation_(formulation),
       mode_(mode),
       N_(N) {

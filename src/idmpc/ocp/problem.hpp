@@ -13,6 +13,7 @@
 /// (begin_evaluation): what the stages keep between its calls is read only under that token.
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "idmpc/model/data.hpp"
@@ -88,6 +89,15 @@ class OcpProblem {
   /// @brief The target q_ref of the costs (size n, finite; else std::invalid_argument), with the
   /// torque reference u_ref = ID(q_ref, 0, 0) − d̂ recomputed. Allocation-free; between updates.
   void set_target(const Vec& q_ref) { terms_.set_target(q_ref); }
+  /// @brief A moving joint target q_ref(t) with v_ref(t) its rate (StageTerms); null: the fixed one.
+  void set_joint_trajectory(std::shared_ptr<const Trajectory> q_ref) { terms_.set_joint_trajectory(std::move(q_ref)); }
+  /// @brief A frame target (cost.hpp) or none, and its position moving as p_ref(t) (null: fixed).
+  void set_frame_target(std::optional<FrameTarget> target) { terms_.set_frame_target(std::move(target)); }
+  void set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref) { terms_.set_frame_trajectory(std::move(p_ref)); }
+  /// @brief The references every stage sees (StageTerms): q_ref(i), v_ref(i), u_ref(i), frame.
+  const StageTerms& terms() const { return terms_; }
+  /// @brief Stage i's references at t0 + i·Δτ (what moves; nothing when nothing does).
+  void set_stage_times(double t0, double dtau) { terms_.set_stage_times(t0, dtau); }
 
   /// @brief Unknowns of one stage: its input (n), dummy inputs d (m), multipliers ρ (m), in
   /// this order; the stage's block F_i of the residual has the same layout.
@@ -140,8 +150,11 @@ class OcpProblem {
     stages_->hamiltonian(terms_, ev, i, q, v, a, u, d, rho, lmd_next, gmm_next, hq, hv, F, state);
   }
 
-  /// @brief Terminal costates λ_N = ∂φ/∂q, γ_N = ∂φ/∂v (eqs. 16, 18).
-  void terminal_costate(In q, In v, Out lmd, Out gmm) const { terms_.cost().terminal_gradient(q, v, lmd, gmm); }
+  /// @brief Terminal costates λ_N = ∂φ/∂q, γ_N = ∂φ/∂v (eqs. 16, 18) at the end of a horizon of
+  /// `stages` stages (its references are those of stage `stages`).
+  void terminal_costate(int stages, In q, In v, Out lmd, Out gmm) const {
+    terms_.state_gradient(stages, q, v, lmd, gmm);
+  }
 
   /// @brief Bytes of heap the stages' workspaces own (per-stage workspaces, lanes and the
   /// products kept from them).

@@ -1,5 +1,6 @@
 #include "idmpc/ocp/stage_terms.hpp"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -13,23 +14,57 @@ const Model& checked(const std::shared_ptr<const Model>& model) {
   return *model;
 }
 
+std::string frame_label(const Frame& frame) { return "frame target '" + frame.name + "'"; }
+
 }  // namespace
 
-StageTerms::StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits)
+StageTerms::StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits, int N,
+                       bool frame_jacobian_matrix)
     : model_(std::move(model)),
       cost_(std::move(cost)),
       bounds_(limits, cost_.weights().R, cost_.n()),
+      N_(N),
+      frame_jacobian_matrix_(frame_jacobian_matrix),
       d_hat_(Vec::Zero(checked(model_).n)),
       zero_(Vec::Zero(model_->n)),
-      tau_ref_(Vec::Zero(model_->n)),
-      u_ref_(Vec::Zero(model_->n)),
       rnea_data_(*model_, DataParts::rnea()) {
   if (cost_.n() != model_->n) {
     throw std::invalid_argument("the costs have " + std::to_string(cost_.n()) + " joints, the model " +
                                 std::to_string(model_->n));
   }
-  tau_ref_ = rnea(*model_, rnea_data_, cost_.q_ref(), zero_, zero_);
-  update_torque_reference();
+  if (N < 1) throw std::invalid_argument("horizon steps N must be at least 1, got " + std::to_string(N));
+  for (MatX<double>* x : {&q_ref_, &v_ref_, &u_ref_}) *x = MatX<double>::Zero(model_->n, N + 1);
+  update_joint_references();
+}
+
+StageTerms::StageTerms(const StageTerms& o)
+    : model_(o.model_),
+      cost_(o.cost_),
+      bounds_(o.bounds_),
+      N_(o.N_),
+      frame_jacobian_matrix_(o.frame_jacobian_matrix_),
+      d_hat_(o.d_hat_),
+      zero_(o.zero_),
+      q_ref_(o.q_ref_),
+      v_ref_(o.v_ref_),
+      u_ref_(o.u_ref_),
+      rnea_data_(*o.model_, DataParts::rnea()),
+      joint_trajectory_(o.joint_trajectory_),
+      frame_trajectory_(o.frame_trajectory_),
+      t0_(o.t0_),
+      dtau_(o.dtau_),
+      sampled_(o.sampled_),
+      frame_(o.frame_),
+      p_ref_(o.p_ref_),
+      kinematics_(o.kinematics_),
+      jacobian_(o.jacobian_) {}
+
+StageTerms& StageTerms::operator=(const StageTerms& o) {
+  if (this != &o) {
+    StageTerms copy(o);
+    *this = std::move(copy);
+  }
+  return *this;
 }
 
 void StageTerms::set_disturbance(const Vec& d_hat) {
@@ -38,19 +73,140 @@ void StageTerms::set_disturbance(const Vec& d_hat) {
                                 std::to_string(d_hat.size()));
   }
   d_hat_ = d_hat;
-  update_torque_reference();
+  update_joint_references();
 }
 
 void StageTerms::set_target(const Vec& q_ref) {
   cost_.set_target(q_ref);
-  tau_ref_ = rnea(*model_, rnea_data_, cost_.q_ref(), zero_, zero_);
-  update_torque_reference();
+  joint_trajectory_.reset();
+  update_joint_references();
 }
 
-void StageTerms::update_torque_reference() {
-  // the gravity and spring torque that holds the target, less what the model misses (DESIGN §8, §10)
-  u_ref_ = tau_ref_ - d_hat_;
-  cost_.set_torque_reference(u_ref_);
+void StageTerms::set_joint_trajectory(std::shared_ptr<const Trajectory> q_ref) {
+  if (q_ref && q_ref->dim() != n()) {
+    throw std::invalid_argument("joint reference '" + q_ref->describe() + "' has " + std::to_string(q_ref->dim()) +
+                                " values, expected " + std::to_string(n()) + " (one per joint)");
+  }
+  joint_trajectory_ = std::move(q_ref);
+  sampled_ = false;
+  update_joint_references();
+}
+
+void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
+  frame_trajectory_.reset();
+  sampled_ = false;
+  if (!target) {
+    frame_.reset();
+    kinematics_.reset();
+    return;
+  }
+  const FrameTarget& f = *target;
+  const std::string label = frame_label(f.frame);
+  if (f.frame.link < -1 || f.frame.link >= n()) {
+    throw std::invalid_argument(label + ": link " + std::to_string(f.frame.link) + " is not a link of the model (" +
+                                std::to_string(n()) + " links)");
+  }
+  if (!f.position_weight.allFinite() || (f.position_weight.array() < 0).any() ||
+      !std::isfinite(f.orientation_weight) || f.orientation_weight < 0) {
+    throw std::invalid_argument(label + ": weights must be finite and non-negative");
+  }
+  if (!f.position.allFinite()) throw std::invalid_argument(label + ": position is not finite");
+  if (!f.rotation.allFinite() || !(f.rotation.transpose() * f.rotation).isIdentity(1e-9) ||
+      f.rotation.determinant() < 0) {
+    throw std::invalid_argument(label + ": rotation is not a rotation matrix");
+  }
+  frame_ = target;
+  kinematics_.emplace(*model_, frame_->frame);
+  jacobian_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
+  p_ref_ = frame_->position.replicate(1, N_ + 1);
+}
+
+void StageTerms::set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref) {
+  if (p_ref && !frame_) {
+    throw std::invalid_argument("frame reference '" + p_ref->describe() + "': the problem has no frame target");
+  }
+  if (p_ref && p_ref->dim() != 3) {
+    throw std::invalid_argument("frame reference '" + p_ref->describe() + "' has " + std::to_string(p_ref->dim()) +
+                                " values, expected 3 (a position)");
+  }
+  frame_trajectory_ = std::move(p_ref);
+  sampled_ = false;
+  update_frame_references();
+}
+
+void StageTerms::set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation) {
+  if (!frame_) throw std::invalid_argument("set_frame_pose: the problem has no frame target");
+  if (!position.allFinite() || !rotation.allFinite()) {
+    throw std::invalid_argument(frame_label(frame_->frame) + ": position or rotation is not finite");
+  }
+  frame_->position = position;
+  frame_->rotation = rotation;
+  if (!frame_trajectory_) update_frame_references();
+}
+
+void StageTerms::set_stage_times(double t0, double dtau) {
+  if (!moving() || (sampled_ && t0 == t0_ && dtau == dtau_)) return;
+  t0_ = t0;
+  dtau_ = dtau;
+  sampled_ = true;
+  if (joint_trajectory_) update_joint_references();
+  if (frame_trajectory_) update_frame_references();
+}
+
+void StageTerms::update_joint_references() {
+  // the gravity and spring torque that holds each stage's target, less what the model misses
+  // (DESIGN §8, §10); a fixed target is one RNEA, copied to every stage
+  if (joint_trajectory_) {
+    if (!sampled_) return;  // until set_stage_times
+    for (int i = 0; i <= N_; ++i) {
+      joint_trajectory_->sample(t0_ + i * dtau_, q_ref_.col(i), v_ref_.col(i));
+      u_ref_.col(i) = rnea(*model_, rnea_data_, q_ref_.col(i), zero_, zero_) - d_hat_;
+    }
+    cost_.set_torque_reference(u_ref_.col(0));
+    return;
+  }
+  u_ref_.col(0) = rnea(*model_, rnea_data_, cost_.q_ref(), zero_, zero_) - d_hat_;
+  for (int i = 0; i <= N_; ++i) {
+    q_ref_.col(i) = cost_.q_ref();
+    v_ref_.col(i).setZero();
+    u_ref_.col(i) = u_ref_.col(0);
+  }
+  cost_.set_torque_reference(u_ref_.col(0));
+}
+
+void StageTerms::update_frame_references() {
+  if (!frame_) return;
+  if (!frame_trajectory_) {
+    for (int i = 0; i <= N_; ++i) p_ref_.col(i) = frame_->position;
+    return;
+  }
+  if (!sampled_) return;
+  for (int i = 0; i <= N_; ++i) {
+    frame_trajectory_->sample(t0_ + i * dtau_, sample3_, rate3_);
+    p_ref_.col(i) = sample3_;
+  }
+}
+
+void StageTerms::state_gradient(int i, In q, In v, Out L_q, Out L_v) const {
+  const VecX<double>& Qq = cost_.weights().Qq;
+  const VecX<double>& Qv = cost_.weights().Qv;
+  L_q = Qq.cwiseProduct(q - q_ref_.col(i));
+  L_v = Qv.cwiseProduct(v - v_ref_.col(i));
+  if (!frame_) return;
+  // Jᵀf with f_lin = w_p∘(p − p_ref), f_ang = ½w_o vee(A − Aᵀ), A = R R_refᵀ (cost.hpp)
+  FrameKinematics<double>& fk = *kinematics_;
+  fk.compute(*model_, q);
+  const Vec3<double> f_lin = frame_->position_weight.cwiseProduct(fk.position() - p_ref_.col(i));
+  const Mat3<double> A = fk.rotation() * frame_->rotation.transpose();
+  const Vec3<double> f_ang =
+      (0.5 * frame_->orientation_weight) * Vec3<double>(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
+  if (frame_jacobian_matrix_) {
+    fk.jacobian(jacobian_);
+    L_q.noalias() += jacobian_.topRows<3>().transpose() * f_lin;
+    L_q.noalias() += jacobian_.bottomRows<3>().transpose() * f_ang;
+  } else {
+    fk.add_jacobian_transpose_times(f_lin, f_ang, L_q);
+  }
 }
 
 }  // namespace idmpc

@@ -1,15 +1,25 @@
 #pragma once
 /// @file stage_terms.hpp
 /// @brief What every stage of a problem shares, whatever its formulation: the model, the costs
-/// with their torque reference, the torque bounds and the disturbance estimate (DESIGN §4, §8,
-/// §10), and the parts of a stage's Hamiltonian that do not involve the dynamics. The stage
-/// models (fd_stages.hpp, id_stages.hpp) add the dynamics' part.
+/// with the references each stage sees, the torque bounds and the disturbance estimate (DESIGN
+/// §4, §8, §10), and the parts of a stage's Hamiltonian that do not involve the dynamics. The
+/// stage models (fd_stages.hpp, id_stages.hpp) add the dynamics' part.
+///
+/// References: stage i = 0 … N (N: the terminal cost) sees the joint target q_ref,i with
+/// v_ref,i, the torque reference u_ref,i = ID(q_ref,i, 0, 0) − d̂ and, with a frame target, the
+/// frame's p_ref,i and R_ref,i. Fixed targets are the same at every stage. A moving reference (a
+/// Trajectory of the joint target, or of the frame target's position) is sampled at the stage
+/// times t_i = t0 + i·Δτ that set_stage_times gives, once per distinct (t0, Δτ): v_ref,i is the
+/// joint trajectory's rate there.
 
 #include <memory>
+#include <optional>
 
+#include "idmpc/dynamics/kinematics.hpp"
 #include "idmpc/model/data.hpp"
 #include "idmpc/ocp/cost.hpp"
 #include "idmpc/ocp/torque_limits.hpp"
+#include "idmpc/ocp/trajectory.hpp"
 
 namespace idmpc {
 
@@ -19,9 +29,17 @@ class StageTerms {
   using In = Eigen::Ref<const Vec>;
   using Out = Eigen::Ref<Vec>;
 
-  /// @brief Sets the cost's torque reference to u_ref = ID(q_ref, 0, 0). Throws
+  /// @brief N stages and the terminal cost; sets the cost's torque reference to
+  /// u_ref = ID(q_ref, 0, 0). `mode` says how the frame cost's gradient is formed (matrix: the
+  /// Jacobian, then its product; adjoint: the product in one sweep). Throws
   /// std::invalid_argument on a null model, sizes that differ from the model's or bad limits.
-  StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits);
+  StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits, int N,
+             bool frame_jacobian_matrix);
+  StageTerms(const StageTerms& o);
+  StageTerms& operator=(const StageTerms& o);
+  StageTerms(StageTerms&&) noexcept = default;
+  StageTerms& operator=(StageTerms&&) noexcept = default;
+  ~StageTerms() = default;
 
   const Model& model() const { return *model_; }
   const std::shared_ptr<const Model>& model_ptr() const { return model_; }
@@ -34,53 +52,107 @@ class StageTerms {
 
   /// @brief d̂ (size n, finite; else std::invalid_argument); u_ref = ID(q_ref, 0, 0) − d̂.
   void set_disturbance(const Vec& d_hat);
-  /// @brief q_ref (size n, finite; else std::invalid_argument); u_ref = ID(q_ref, 0, 0) − d̂.
-  /// Allocation-free.
+  /// @brief The fixed joint target q_ref (size n, finite; else std::invalid_argument), at every
+  /// stage; u_ref = ID(q_ref, 0, 0) − d̂. Replaces a joint trajectory. Allocation-free.
   void set_target(const Vec& q_ref);
 
-  /// @brief w = ∂(L + ρᵀ(s∘c))/∂u = R(u − u_ref) + 2s∘ρ∘(u − ū) on the bounded joints (u, w
-  /// size n; ρ size m).
-  void torque_gradient(In u, In rho, Out w) const {
-    cost_.torque_gradient(u, w);
+  /// @brief A moving joint target: q_ref(t) (dim n; else std::invalid_argument), with its rate
+  /// as v_ref(t); null: back to the fixed target. Sampled at the next set_stage_times.
+  void set_joint_trajectory(std::shared_ptr<const Trajectory> q_ref);
+  const std::shared_ptr<const Trajectory>& joint_trajectory() const { return joint_trajectory_; }
+
+  /// @brief A frame target (cost.hpp) or none; throws std::invalid_argument naming the frame for a
+  /// link outside the model, negative or non-finite weights, a non-finite position or a rotation
+  /// that is not orthonormal. Allocates (between runs, not between updates).
+  void set_frame_target(std::optional<FrameTarget> target);
+  const std::optional<FrameTarget>& frame_target() const { return frame_; }
+  /// @brief The frame target's position moving as p_ref(t) (dim 3; else std::invalid_argument);
+  /// null: fixed at FrameTarget::position. Needs a frame target.
+  void set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref);
+  const std::shared_ptr<const Trajectory>& frame_trajectory() const { return frame_trajectory_; }
+  /// @brief The fixed frame target's position and rotation, without allocating (needs a frame
+  /// target; a position the frame trajectory, if any, overrides).
+  void set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation);
+
+  /// @brief Stage i's references at t_i = t0 + i·Δτ (i = 0 … N) for what moves; allocation-free,
+  /// and nothing at all when (t0, Δτ) is the last one given or nothing moves.
+  void set_stage_times(double t0, double dtau);
+  bool moving() const { return joint_trajectory_ || frame_trajectory_; }
+
+  /// @brief Stage i's joint target, velocity and torque references (i = 0 … N).
+  Eigen::Ref<const Vec> q_ref(int i) const { return q_ref_.col(i); }
+  Eigen::Ref<const Vec> v_ref(int i) const { return v_ref_.col(i); }
+  Eigen::Ref<const Vec> u_ref(int i) const { return u_ref_.col(i); }
+  /// @brief Stage i's frame target position (with a frame target).
+  Eigen::Ref<const Vec3<double>> frame_position_ref(int i) const { return p_ref_.col(i); }
+
+  /// @brief w = ∂(L + ρᵀ(s∘c))/∂u = R(u − u_ref,i) + 2s∘ρ∘(u − ū) on the bounded joints of stage
+  /// i (u, w size n; ρ size m).
+  void torque_gradient(int i, In u, In rho, Out w) const {
+    w = cost_.weights().R.cwiseProduct(u - u_ref_.col(i));
     bounds_.add_torque_gradient(u, rho, w);
   }
 
-  /// @brief torque_gradient for stages in SIMD lanes: u, w size n, ρ size m, of packs P.
-  template <typename P> void torque_gradient(const VecX<P>& u, const VecX<P>& rho, VecX<P>& w) const {
+  /// @brief torque_gradient of the stages i0 … i0 + count − 1 in SIMD lanes (unused lanes repeat
+  /// the last stage): u, w size n, ρ size m, of packs P.
+  template <typename P> void torque_gradient(int i0, int count, const VecX<P>& u, const VecX<P>& rho, VecX<P>& w) const {
     const VecX<double>& R = cost_.weights().R;
-    const VecX<double>& u_ref = cost_.u_ref();
-    for (int j = 0; j < n(); ++j) w[j] = R[j] * (u[j] - u_ref[j]);
+    constexpr int kLanes = static_cast<int>(sizeof(P) / sizeof(double));
+    for (int j = 0; j < n(); ++j) {
+      P u_ref;
+      for (int k = 0; k < kLanes; ++k) u_ref[k] = u_ref_(j, i0 + std::min(k, count - 1));
+      w[j] = R[j] * (u[j] - u_ref);
+    }
     for (int k = 0; k < m(); ++k) {
       const int j = bounds_.joints()[static_cast<size_t>(k)];
       w[j] += (2.0 * bounds_.scale()[k]) * rho[k] * (u[j] - bounds_.middle()[k]);
     }
   }
 
+  /// @brief The state part of stage i's cost gradient, ∂L/∂q and ∂L/∂v (i = N: ∂φ/∂q, ∂φ/∂v,
+  /// the terminal costates): the joint terms and, with a frame target, Jᵀf (cost.hpp).
+  void state_gradient(int i, In q, In v, Out L_q, Out L_v) const;
+
   /// @brief The rest of stage i's block F_i once its first n rows hold ∂H/∂input: ∂H/∂d =
   /// −r_d + 2s∘ρ∘d and ∂H/∂ρ = s∘c; with `state` also hq = ∂L/∂q + gq and hv = ∂L/∂v + λ_{i+1}
   /// + gv (the Euler step q_{i+1} = q_i + Δτ v_i), for the dynamics' parts gq, gv of ∂H/∂q, ∂H/∂v.
-  void close_stage(In q, In v, In u, In d, In rho, In lmd_next, In gq, In gv, Out hq, Out hv, Out F,
+  void close_stage(int i, In q, In v, In u, In d, In rho, In lmd_next, In gq, In gv, Out hq, Out hv, Out F,
                    bool state) const {
     const int n = this->n(), m = this->m();
     if (m > 0) bounds_.dummy_gradients(u, d, rho, F.segment(n, m), F.segment(n + m, m));
     if (!state) return;
-    cost_.state_gradient(q, v, hq, hv);
+    state_gradient(i, q, v, hq, hv);
     hq += gq;
     hv += lmd_next + gv;
   }
 
  private:
-  // u_ref = τ_ref − d̂ into the cost
-  void update_torque_reference();
+  // q_ref_, v_ref_ and u_ref_ = ID(q_ref, 0, 0) − d̂ of every stage, from the fixed target or the
+  // joint trajectory's samples
+  void update_joint_references();
+  // p_ref_ and R_ref_ of every stage from the fixed frame target or the frame trajectory's samples
+  void update_frame_references();
 
   std::shared_ptr<const Model> model_;
   QuadraticCost cost_;
   TorqueBounds bounds_;
+  int N_;
+  bool frame_jacobian_matrix_;
   Vec d_hat_;      ///< disturbance estimate
   Vec zero_;       ///< v = a = 0 of the torque reference
-  Vec tau_ref_;    ///< ID(q_ref, 0, 0)
-  Vec u_ref_;      ///< ID(q_ref, 0, 0) − d̂, handed to the cost
+  MatX<double> q_ref_, v_ref_, u_ref_;  ///< n × (N+1): stage i's references
   Data rnea_data_; ///< workspace of ID(q_ref, 0, 0)
+  std::shared_ptr<const Trajectory> joint_trajectory_, frame_trajectory_;
+  double t0_ = 0, dtau_ = 0;  ///< stage times of the references' samples
+  bool sampled_ = false;      ///< whether the moving references hold samples at (t0_, dtau_)
+
+  std::optional<FrameTarget> frame_;
+  MatX<double> p_ref_;                  ///< 3 × (N+1) frame positions
+  // the frame's kinematics at a stage's q and what its gradient needs (state_gradient is const:
+  // scratch, not state)
+  mutable std::optional<FrameKinematics<double>> kinematics_;
+  mutable Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian_;
+  Vec3<double> sample3_, rate3_;
 };
 
 }  // namespace idmpc

@@ -110,6 +110,7 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
   const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
   const double T = horizon_.length(t);
   const bool full = settings_.init_full_horizon && T > 0;
+  ocp_.set_time(t);
   // one stage's unknowns (input, d, ρ): the input starts at zero, ρ = 0 leaves it unconstrained
   VecX<double> z = VecX<double>::Zero(sd);
   if (m > 0) {
@@ -282,6 +283,7 @@ bool Cgmres::step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen
   const double h = settings_.h, T = horizon_.length(t), Th = frozen ? T : horizon_.length(t + h);
   const double zeta = frozen ? 1.0 / settings_.dt : settings_.zeta;
   failure_.clear();
+  ocp_.set_time(t);
 
   // F at the measured state (multiple shooting: with the defects of the stored trajectories),
   // and at the state predicted h ahead with ẋ = (v, a_0); with torque limits, (d, ρ) first made
@@ -306,6 +308,8 @@ bool Cgmres::step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen
     Eh_.assign_scaled(E_, 1.0 - h * zeta);
     defects = &Eh_;
   }
+  // F h ahead in time too: the references' motion is part of ∂F/∂t
+  ocp_.set_time(frozen ? t : t + h);
   ocp_.residual(U_, qh_, vh_, Th, Fx_, defects);
 
   // right-hand side b = −ζF − (∂F/∂x ẋ + ∂F/∂t) by forward difference

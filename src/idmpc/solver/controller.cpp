@@ -39,7 +39,11 @@ OcpProblem make_problem(const std::shared_ptr<const Model>& model, const Control
       (s.torque_lower.array().isFinite() || s.torque_upper.array().isFinite()).any()) {
     limits = TorqueLimits{s.torque_lower, s.torque_upper};
   }
-  return OcpProblem(std::move(horizon), s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
+  OcpProblem problem(std::move(horizon), s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
+  problem.set_frame_target(s.frame_target);
+  if (s.frame_reference) problem.set_frame_trajectory(s.frame_reference);
+  if (s.joint_reference) problem.set_joint_trajectory(s.joint_reference);
+  return problem;
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 /// the timing above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "idmpc/model/data.hpp"
@@ -33,7 +34,14 @@ struct ControllerSettings {
   int N = 25;                 ///< horizon stages
   CgmresSettings cgmres;      ///< Δt, T_f, α, kmax, ζ, h, shooting scheme, start
   OcpWeights weights;         ///< Q_q, Q_v, Q_a, R (Q_a may be empty: zero)
-  VecX<double> q_ref;         ///< the target; Controller::set_target changes it between updates
+  VecX<double> q_ref;         ///< the joint target; Controller::set_target changes it between updates
+  /// @brief A moving joint target q_ref(t) (its rate the velocity reference); null: q_ref.
+  std::shared_ptr<const Trajectory> joint_reference;
+  /// @brief A target for a frame of the robot (cost.hpp: position and orientation weights),
+  /// beside the joint terms (with a frame target, Q_q and q_ref weigh the posture).
+  std::optional<FrameTarget> frame_target;
+  /// @brief The frame target's position moving as p_ref(t); null: FrameTarget::position.
+  std::shared_ptr<const Trajectory> frame_reference;
   /// @brief The actuators' torque range, given once: the horizon's constraints (DESIGN §8) on
   /// every joint bounded on both sides, and the clamp of every torque the controller returns.
   /// Empty: unbounded; ±infinity per joint: that joint unbounded.

@@ -63,6 +63,7 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   assert(stages >= 1 && stages <= N() && U.size() >= stages * sd && F.size() >= stages * sd);
   assert(e == nullptr || stages == N());
   const double dtau = T / stages;
+  problem_.set_stage_times(t_, dtau);
   const auto t0 = timing_ ? clock::now() : clock::time_point{};
 
   // forward sweep: explicit Euler from the measured state (eq. 12), plus the defects; FD's
@@ -92,7 +93,7 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   // never used, so stage 0 gives F_0 only
   auto& lmd = x_.lmd;
   auto& gmm = x_.gmm;
-  problem_.terminal_costate(q.col(stages), v.col(stages), lmd.col(stages), gmm.col(stages));
+  problem_.terminal_costate(stages, q.col(stages), v.col(stages), lmd.col(stages), gmm.col(stages));
   if (e) {
     lmd.col(stages) += e->lmd.col(stages);
     gmm.col(stages) += e->gmm.col(stages);
@@ -122,6 +123,7 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   const int sd = problem_.stage_dim(), N = this->N();
   assert(U.size() == dim() && F.size() == dim());
   const double dtau = T / N;
+  problem_.set_stage_times(t_, dtau);
   const auto t0 = timing_ ? clock::now() : clock::time_point{};
 
   // every stage at its stored state: the stages are independent (FD with adjoints: at the stored
@@ -147,7 +149,7 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   const auto t1 = timing_ ? clock::now() : t0;
 
   // every stage's Hamiltonian at the stored costates of the next stage
-  problem_.terminal_costate(q.col(N), v.col(N), phi_q_, phi_v_);
+  problem_.terminal_costate(N, q.col(N), v.col(N), phi_q_, phi_v_);
   e.lmd.col(N) = x_.lmd.col(N) - phi_q_;
   e.gmm.col(N) = x_.gmm.col(N) - phi_v_;
   e.lmd.col(0).setZero();

@@ -75,6 +75,12 @@ class Shooting {
   DerivativeMode derivative_mode() const { return problem_.derivative_mode(); }
   const OcpWeights& weights() const { return problem_.weights(); }
 
+  /// @brief The time t of the horizon's start for the evaluations that follow: stage i's
+  /// references are those at t + i·Δτ (OcpProblem::set_stage_times). Zero until set; matters
+  /// only for references that move.
+  void set_time(double t) { t_ = t; }
+  double time() const { return t_; }
+
   /// @brief Single shooting: stacked optimality residual F(U, x) (size stages·stage_dim) of the
   /// problem with the first `stages` steps over a horizon of length T (Δτ = T/stages), from
   /// x = (q0, v0). With `defects` (full horizon only), the rollout and the costate sweep add
@@ -125,6 +131,7 @@ class Shooting {
   }
 
   OcpProblem problem_;
+  double t_ = 0;
   bool timing_ = false;
   OcpTimes times_;
   ShootingTrajectory x_;     ///< states and costates, n × (N+1)
