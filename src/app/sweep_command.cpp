@@ -49,8 +49,11 @@ std::string stages_note(const SweepOptions& opt) {
                            "paper's arithmetic.";
 }
 
-// the real-arm grid: each task of a list (mjcf/arms.json unless --arms-tasks), both formulations
+// the real-arm grids: each task of a list under both formulations; arms: mjcf/arms.json (reach
+// tasks), tracking: mjcf/tracking.json (frame targets that move), unless --arms-tasks
 constexpr const char* kArmsTable = "arms";
+constexpr const char* kTrackingTable = "tracking";
+bool task_table(const std::string& table) { return table == kArmsTable || table == kTrackingTable; }
 
 struct Cell {
   // arms: model is the task file as the list names it
@@ -86,6 +89,9 @@ struct CellResult {
   long contact_steps = 0;                // control steps with a contact in the plant
   double max_contact_force = NAN;        // the largest contact normal force [N]
   double final_disturbance = NAN;        // max|d̂| of the observer at the end [N m] (0 when off)
+  // a frame target's tracking error: position [m] and orientation [rad], RMS and max (NaN without)
+  double position_rms = NAN, position_max = NAN, orientation_rms = NAN, orientation_max = NAN;
+  double tracking_tolerance = NAN;
 };
 
 // the paper's figure for a cell (mjcf/paper_tables.json)
@@ -105,18 +111,19 @@ std::string in_models(const SweepOptions& opt, const std::string& file) {
 
 // the list of tasks of the arms table: --arms-tasks, or arms.json of the models directory
 std::string arms_list(const SweepOptions& opt) {
-  return opt.arms_tasks.empty() ? in_models(opt, "arms.json") : opt.arms_tasks;
+  if (!opt.arms_tasks.empty()) return opt.arms_tasks;
+  return in_models(opt, opt.tables == kTrackingTable ? "tracking.json" : "arms.json");
 }
 
 // the file a cell runs: the paper's model, or an arm's task file (relative to its list's directory)
 std::string cell_file(const SweepOptions& opt, const Cell& c) {
-  if (c.table != kArmsTable) return in_models(opt, c.model);
+  if (!task_table(c.table)) return in_models(opt, c.model);
   return (std::filesystem::path(arms_list(opt)).parent_path() / c.model).string();
 }
 
 // the task a cell runs: the paper's on the cell's model, or an arm's own task file
 Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
-  const bool arm = c.table == kArmsTable;
+  const bool arm = task_table(c.table);
   Task task = arm ? load_task(cell_file(opt, c)) : base;
   if (!arm) {
     task.model = cell_file(opt, c);
@@ -162,7 +169,7 @@ std::vector<std::string> arm_tasks(const SweepOptions& opt) {
 // a listed task that cannot run is refused before any cell runs: the task file reads, its model
 // loads, and its settings fit the model (q0, q_ref, limits and weights per joint)
 Task checked_arm_task(const SweepOptions& opt, const std::string& file) {
-  const std::string path = cell_file(opt, Cell{kArmsTable, file, "", "", "", 0, 0, 0, "", false});
+  const std::string path = cell_file(opt, Cell{opt.tables, file, "", "", "", 0, 0, 0, "", false});
   try {
     Task task = load_task(path);
     const mj::TaskRun run(task);
@@ -205,20 +212,22 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     parse_shooting(opt.shooting);
     shootings = {opt.shooting};
   }
-  if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && opt.tables != kArmsTable) {
-    throw std::invalid_argument("--tables must be 12, 3, all or arms, got '" + opt.tables + "'");
+  if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && !task_table(opt.tables)) {
+    throw std::invalid_argument("--tables must be 12, 3, all, arms or tracking, got '" + opt.tables + "'");
   }
   if (opt.offset_free != "task" && opt.offset_free != "on" && opt.offset_free != "off" && opt.offset_free != "both") {
     throw std::invalid_argument("--offset-free must be task, on, off or both, got '" + opt.offset_free + "'");
   }
-  if (opt.tables != kArmsTable && opt.offset_free != "task") {
-    throw std::invalid_argument("--offset-free is an axis of --tables arms only, got --tables " + opt.tables);
+  if (!task_table(opt.tables) && opt.offset_free != "task") {
+    throw std::invalid_argument("--offset-free is an axis of --tables arms and tracking only, got --tables " +
+                                opt.tables);
   }
-  if (opt.tables != kArmsTable && !opt.arms_tasks.empty()) {
-    throw std::invalid_argument("--arms-tasks lists the tasks of --tables arms, got --tables " + opt.tables);
+  if (!task_table(opt.tables) && !opt.arms_tasks.empty()) {
+    throw std::invalid_argument("--arms-tasks lists the tasks of --tables arms or tracking, got --tables " +
+                                opt.tables);
   }
   std::vector<Cell> cells;
-  if (opt.tables == kArmsTable) {
+  if (task_table(opt.tables)) {
     std::vector<std::pair<std::string, Task>> tasks;
     for (const std::string& file : arm_tasks(opt)) tasks.emplace_back(file, checked_arm_task(opt, file));
     for (const auto& mode : modes) {
@@ -226,7 +235,7 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
         for (const auto& [file, t] : tasks) {
           for (const bool offset_free : offset_free_axis(opt, t)) {
             for (const char* f : {"fd", "id"}) {
-              cells.push_back({kArmsTable, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free});
+              cells.push_back({opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free});
             }
           }
         }
@@ -250,7 +259,8 @@ const std::vector<std::string> kCsvColumns = {
     "table", "model", "n", "formulation", "derivatives", "shooting", "offset_free", "N", "kmax", "Qa", "diverged",
     "diverged_at", "mean_update_ms", "p95_update_ms", "final_q_error", "reach_tolerance", "reached",
     "final_v_norm", "paper_ms", "paper_note", "steps", "saturated_steps", "max_constraint_violation",
-    "contact_steps", "max_contact_force", "max_final_disturbance", "settings"};
+    "contact_steps", "max_contact_force", "max_final_disturbance", "position_rms", "position_max",
+    "orientation_rms", "orientation_max", "tracking_tolerance", "settings"};
 
 std::string csv_header() {
   std::string h;
@@ -298,6 +308,11 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   set("max_constraint_violation", r.max_violation);
   set("contact_steps", r.contact_steps);
   set("max_contact_force", r.max_contact_force);
+  set("position_rms", r.position_rms);
+  set("position_max", r.position_max);
+  set("orientation_rms", r.orientation_rms);
+  set("orientation_max", r.orientation_max);
+  set("tracking_tolerance", r.tracking_tolerance);
   set("max_final_disturbance", r.final_disturbance);
   set("settings", r.cell.settings);
   std::string row;
@@ -354,10 +369,15 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
       r.contact_steps = std::stol(at("contact_steps"));
       r.max_contact_force = std::stod(at("max_contact_force"));
       r.final_disturbance = std::stod(at("max_final_disturbance"));
+      r.position_rms = std::stod(at("position_rms"));
+      r.position_max = std::stod(at("position_max"));
+      r.orientation_rms = std::stod(at("orientation_rms"));
+      r.orientation_max = std::stod(at("orientation_max"));
+      r.tracking_tolerance = std::stod(at("tracking_tolerance"));
       if (!keys.count(r.cell.key())) {
         throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
                                     r.cell.formulation + " " + r.cell.variant() +
-                                    (r.cell.table == kArmsTable
+                                    (task_table(r.cell.table)
                                          ? std::string(r.cell.offset_free ? ", offset-free on" : ", offset-free off") +
                                                ": other duration, weights, task or --offset-free)"
                                          : std::string(": other duration, weights or task)")) +
@@ -513,8 +533,65 @@ std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cell
   return o.str();
 }
 
+// the tracking table: per task (and offset-free setting) and variant, FD beside ID: ms per update
+// and the frame's position error, RMS and max over the run, with the orientation error
+std::string tracking_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
+                              const std::map<std::string, CellResult>& done) {
+  auto find = [&](const Cell& c) -> const CellResult* {
+    const auto it = done.find(c.key());
+    return it == done.end() ? nullptr : &it->second;
+  };
+  const std::vector<std::string> modes = variants(cells);
+  using Row = std::pair<std::string, bool>;
+  std::vector<Row> rows;
+  for (const Cell& c : cells) {
+    if (std::find(rows.begin(), rows.end(), Row{c.model, c.offset_free}) == rows.end()) {
+      rows.emplace_back(c.model, c.offset_free);
+    }
+  }
+  auto cell_of = [&](const Row& row, const std::string& f, const std::string& mode) -> const CellResult* {
+    for (const Cell& c : cells) {
+      if (c.model == row.first && c.offset_free == row.second && c.formulation == f && c.variant() == mode) {
+        return find(c);
+      }
+    }
+    return nullptr;
+  };
+  auto mm = [](double m) { return fmt(1e3 * m, 3); };
+  const bool shipped_list = opt.arms_tasks.empty() && opt.models_dir.empty();
+  std::ostringstream o;
+  o << "# idmpc sweep: tracking a moving frame target\n\n"
+    << "Each task of `" << (shipped_list ? std::string("mjcf/tracking.json") : arms_list(opt))
+    << "` under FD and ID: a frame of the arm (its tool point) follows a reference that moves, torque limits from "
+       "the arm's actuators active in the OCP and at the plant. Mean ms per control update; the position error "
+       "|p - p_ref| of the frame measured on the plant (MuJoCo's kinematics) at every control step against the "
+       "reference at that time, RMS and max over the run [mm]; the orientation error (angle of R_ref^T R) RMS "
+       "[deg]. `*` diverged, `°` RMS position error not below the task's tracking_tolerance. "
+    << stages_note(opt) << "\n\n| task | offset-free | variant | FD ms | ID ms | ID/FD | FD RMS / max [mm] | "
+       "ID RMS / max [mm] | FD / ID orientation RMS [deg] |\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const Row& row : rows) {
+    for (const auto& mode : modes) {
+      const CellResult *fd = cell_of(row, "fd", mode), *id = cell_of(row, "id", mode);
+      auto ms = [](const CellResult* r) {
+        return r ? fmt(r->mean_ms) + (r->diverged ? "*" : (r->reached ? "" : "°")) : std::string("–");
+      };
+      auto err = [&](const CellResult* r) {
+        return r && !r->diverged ? mm(r->position_rms) + " / " + mm(r->position_max) : std::string("–");
+      };
+      auto deg = [](const CellResult* r) {
+        return r && !r->diverged ? fmt(r->orientation_rms * 180.0 / M_PI, 3) : std::string("–");
+      };
+      o << "| " << row.first << " | " << (row.second ? "on" : "off") << " | " << mode << " | " << ms(fd) << " | "
+        << ms(id) << " | " << fmt(fd && id ? id->mean_ms / fd->mean_ms : NAN, 2) << " | " << err(fd) << " | "
+        << err(id) << " | " << deg(fd) << " / " << deg(id) << " |\n";
+    }
+  }
+  return o.str();
+}
+
 std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
                      const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
+  if (opt.tables == kTrackingTable) return tracking_markdown(opt, cells, done);
   if (opt.tables == kArmsTable) return arms_markdown(opt, cells, done);
   auto find = [&](const Cell& c) -> const CellResult* {
     const auto it = done.find(c.key());
@@ -651,7 +728,7 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
     std::replace(name.begin(), name.end(), '/', '_');
     log = opt.out_dir + "/log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
           (c.shooting == "single" ? "" : "_" + c.shooting) + "_N" + std::to_string(c.N) + "_k" +
-          std::to_string(c.kmax) + (c.table == kArmsTable ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
+          std::to_string(c.kmax) + (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
           ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
@@ -675,6 +752,13 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   r.max_contact_force = s.max_contact_force;
   r.final_disturbance = 0;
   for (double d : s.final_disturbance) r.final_disturbance = std::max(r.final_disturbance, std::abs(d));
+  if (s.tracking) {
+    r.position_rms = s.tracking->position_rms;
+    r.position_max = s.tracking->position_max;
+    r.orientation_rms = s.tracking->orientation_rms;
+    r.orientation_max = s.tracking->orientation_max;
+    r.tracking_tolerance = s.task.tracking_tolerance;
+  }
   return r;
 }
 
@@ -690,7 +774,7 @@ void run(const SweepOptions& opt) {
     }
   }
   fs::create_directories(opt.out_dir);
-  const std::string stem = opt.out_dir + (opt.tables == kArmsTable ? "/arms" : "/sweep");
+  const std::string stem = opt.out_dir + (task_table(opt.tables) ? "/" + opt.tables : std::string("/sweep"));
   const std::string csv = stem + ".csv", md = stem + ".md";
   // one sweep at a time in a directory: the lock goes with the process, however it ends
   const int dir_fd = ::open(opt.out_dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
@@ -718,7 +802,7 @@ void run(const SweepOptions& opt) {
   int index = 0;
   for (const Cell& c : cells) {
     ++index;
-    const bool arm = c.table == kArmsTable;
+    const bool arm = task_table(c.table);
     std::fprintf(stderr, "[%d/%zu] %s %s %s%s N=%d kmax=%d: ", index, cells.size(), c.model.c_str(),
                  c.formulation == "fd" ? "FD" : "ID", c.variant().c_str(),
                  arm ? (c.offset_free ? ", offset-free on" : ", offset-free off") : "", c.N, c.kmax);
@@ -756,14 +840,15 @@ void register_sweep(CLI::App& app) {
   add_data_dir_option(*sub);
   CLI::Option* tables =
       sub->add_option("--tables", opt->tables,
-                      "12 (arm4 N x kmax), 3 (n = 8..32), all, or arms (each task of --arms-tasks under FD and ID, "
-                      "written to arms.csv and arms.md)")
+                      "12 (arm4 N x kmax), 3 (n = 8..32), all, arms (each task of --arms-tasks under FD and ID, "
+                      "written to arms.csv and arms.md) or tracking (each task of --arms-tasks, by default "
+                      "mjcf/tracking.json, with its tracking error, written to tracking.csv and tracking.md)")
           ->capture_default_str();
   CLI::Option* arms_tasks =
       sub->add_option("--arms-tasks", opt->arms_tasks,
-                      "the tasks of --tables arms (implied when --tables is not given): a JSON file "
-                      "{\"description\": ..., \"tasks\": [task files, relative to it]} like mjcf/arms.json, the "
-                      "default (arms.json of --models)");
+                      "the tasks of --tables arms or tracking (arms implied when --tables is not given): a JSON "
+                      "file {\"description\": ..., \"tasks\": [task files, relative to it]} like mjcf/arms.json, "
+                      "the default (arms.json or tracking.json of --models)");
   sub->add_option("--offset-free", opt->offset_free,
                   "arms: offset-free tracking (the disturbance observer) as each task sets it (task), on, off, or "
                   "both: every task with it on and off, side by side")

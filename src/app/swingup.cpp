@@ -108,10 +108,10 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
   std::optional<RunLogWriter> writer;
   if (!log_path.empty()) {
     log.emplace(log_path);
-    writer.emplace(log->stream(), run.n(), limited);
+    writer.emplace(log->stream(), run.n(), limited, run.frame_target().has_value());
   }
   auto on_step = [&](const mj::StepRecord& s) {
-    if (writer) writer->row(s.t, s.q, s.v, s.u, s.u_commanded, s.residual, s.update_ms);
+    if (writer) writer->row(s.t, s.q, s.v, s.u, s.u_commanded, s.residual, s.update_ms, s.frame_position, s.frame_target);
   };
   mj::RunResult result = run.run(on_step);
   if (log) log->commit();
@@ -161,8 +161,18 @@ std::string human_summary(const RunSummary& s) {
   o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
   o << "  final max|q - qref| = " << s.final_q_error << ", |v| = " << s.final_v_norm
     << ", mean residual " << s.mean_residual << "\n";
-  o << "  target " << (s.reached ? "REACHED" : "NOT reached") << " (max|q - qref| < " << s.task.reach_tolerance
-    << " at the end)\n";
+  if (s.tracking) {
+    const TrackingResult& r = *s.tracking;
+    const bool moving = !s.task.reference.is_null();
+    o << "  frame '" << s.task.target->frame << "': position error RMS " << 1e3 * r.position_rms << " mm, max "
+      << 1e3 * r.position_max << " mm, final " << 1e3 * r.final_position_error << " mm; orientation error RMS "
+      << r.orientation_rms * 180 / M_PI << " deg, max " << r.orientation_max * 180 / M_PI << " deg\n";
+    o << "  target " << (s.reached ? "REACHED" : "NOT reached") << " (position error "
+      << (moving ? "RMS" : "at the end") << " < " << 1e3 * s.task.tracking_tolerance << " mm)\n";
+  } else {
+    o << "  target " << (s.reached ? "REACHED" : "NOT reached") << " (max|q - qref| < " << s.task.reach_tolerance
+      << " at the end)\n";
+  }
   if (!s.final_disturbance.empty() && s.task.offset_free) {
     double largest = 0;
     for (double d : s.final_disturbance) largest = std::max(largest, std::abs(d));

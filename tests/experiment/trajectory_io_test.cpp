@@ -212,6 +212,19 @@ TEST(TrajectoryFromJson, CircleStartDirectionIsWorldZInThePlane) {
   }
 }
 
+TEST(TrajectoryFromJson, AFacingCircleIsAVerticalPlaneFacingTheWorldOrigin) {
+  // start (0.3, -0.4, 0.5): the normal is its horizontal direction (0.6, -0.8, 0), e1 world +z
+  const VecX<double> start = Vec3<double>(0.3, -0.4, 0.5);
+  const auto traj = from_json(R"({"shape": "circle", "radius": 0.05, "frequency": 0.5, "normal": "facing"})", start);
+  EXPECT_LT((as_circle(traj).normal() - Vec3<double>(0.6, -0.8, 0)).norm(), 1e-15);
+  EXPECT_EQ(as_circle(traj).e1(), Vec3<double>::UnitZ());
+  EXPECT_LT((value_at(*traj, 0) - start).norm(), 1e-15);
+  EXPECT_EQ(json_error(R"({"shape": "circle", "radius": 1, "frequency": 1, "normal": "facing"})",
+                       Vec3<double>(0, 0, 1)),
+            kWhere + ": field 'normal': expected [x, y, z], or \"facing\" with a start off the world's vertical axis, "
+                     "got \"facing\"");
+}
+
 TEST(TrajectoryFromJson, CircleWithACentreStartsTowardsTheStart) {
   // start projected onto the plane x = const lies along (0, 3, 4) from the centre
   const auto traj = from_json(R"({"shape": "circle", "radius": 0.05, "frequency": 0.5, "center": [0.1, -0.4, 0.1]})",

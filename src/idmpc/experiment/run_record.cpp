@@ -17,7 +17,9 @@
 namespace idmpc {
 namespace {
 
-constexpr const char* kHeaderShape = "t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,update_ms";
+constexpr const char* kHeaderShape =
+    "t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,update_ms[,x,y,z,x_ref,y_ref,z_ref]";
+const std::vector<std::string> kFrameColumns = {"x", "y", "z", "x_ref", "y_ref", "z_ref"};
 
 std::string trim(const std::string& s) {
   std::size_t b = 0;
@@ -51,6 +53,7 @@ struct Layout {
   int n = 0;
   int nu = 0;
   bool commanded = false;  ///< uc* columns after u*
+  bool frame = false;      ///< a frame's position and its target after update_ms
 };
 
 bool parse_header(const std::vector<std::string>& cols, Layout& layout) {
@@ -66,7 +69,11 @@ bool parse_header(const std::vector<std::string>& cols, Layout& layout) {
   at += static_cast<std::size_t>(layout.nu);
   layout.commanded = count_indexed(cols, at, "uc") == layout.nu;
   if (layout.commanded) at += static_cast<std::size_t>(layout.nu);
-  return cols.size() == at + 2 && cols[at] == "residual" && cols[at + 1] == "update_ms";
+  if (cols.size() < at + 2 || cols[at] != "residual" || cols[at + 1] != "update_ms") return false;
+  at += 2;
+  layout.frame = cols.size() == at + kFrameColumns.size() && std::equal(kFrameColumns.begin(), kFrameColumns.end(),
+                                                                         cols.begin() + static_cast<long>(at));
+  return cols.size() == at || layout.frame;
 }
 
 bool parse_number(const std::string& text, double& value) {
@@ -208,8 +215,13 @@ RunLog read_run_log(const std::string& csv_path) {
       log.u_commanded.insert(log.u_commanded.end(), values.begin() + u_at + log.nu,
                              values.begin() + u_at + 2 * log.nu);
     }
-    log.residual.push_back(values[columns - 2]);
-    log.update_ms.push_back(values[columns - 1]);
+    const std::size_t end = columns - (layout.frame ? kFrameColumns.size() : 0);
+    log.residual.push_back(values[end - 2]);
+    log.update_ms.push_back(values[end - 1]);
+    if (layout.frame) {
+      log.frame.insert(log.frame.end(), values.begin() + static_cast<long>(end), values.begin() + static_cast<long>(end) + 3);
+      log.frame_ref.insert(log.frame_ref.end(), values.begin() + static_cast<long>(end) + 3, values.end());
+    }
   }
   if (log.t.empty()) {
     throw std::runtime_error(where + " has a header but no rows: expected at least one row");
@@ -218,23 +230,35 @@ RunLog read_run_log(const std::string& csv_path) {
   return log;
 }
 
-RunLogWriter::RunLogWriter(std::ostream& out, int n, bool commanded) : out_(out), n_(n), commanded_(commanded) {
+RunLogWriter::RunLogWriter(std::ostream& out, int n, bool commanded, bool frame)
+    : out_(out), n_(n), commanded_(commanded), frame_(frame) {
   out_ << "t";
   for (const char* p : {"q", "v", "u", "uc"}) {
     if (std::string(p) == "uc" && !commanded_) continue;
     for (int i = 0; i < n_; ++i) out_ << ',' << p << i;
   }
-  out_ << ",residual,update_ms\n" << std::setprecision(10);
+  out_ << ",residual,update_ms";
+  if (frame_) {
+    for (const std::string& c : kFrameColumns) out_ << ',' << c;
+  }
+  out_ << '\n' << std::setprecision(10);
 }
 
 void RunLogWriter::row(double t, const VecX<double>& q, const VecX<double>& v, const VecX<double>& u,
-                       const VecX<double>& u_commanded, double residual, double update_ms) {
+                       const VecX<double>& u_commanded, double residual, double update_ms,
+                       const Vec3<double>* frame_position, const Vec3<double>* frame_target) {
   out_ << t;
   for (const VecX<double>* x : {&q, &v, &u, &u_commanded}) {
     if (x == &u_commanded && !commanded_) continue;
     for (int i = 0; i < n_; ++i) out_ << ',' << (*x)[i];
   }
-  out_ << ',' << residual << ',' << update_ms << '\n';
+  out_ << ',' << residual << ',' << update_ms;
+  if (frame_) {
+    for (const Vec3<double>* p : {frame_position, frame_target}) {
+      for (int k = 0; k < 3; ++k) out_ << ',' << (p ? (*p)[k] : std::numeric_limits<double>::quiet_NaN());
+    }
+  }
+  out_ << '\n';
 }
 
 std::string RunSummary::label() const {
@@ -310,6 +334,12 @@ nlohmann::json to_json(const RunSummary& s) {
   j["final_v_norm"] = s.final_v_norm;
   j["mean_residual"] = s.mean_residual;
   j["reached"] = s.reached;
+  if (s.tracking) {
+    const TrackingResult& r = *s.tracking;
+    j["tracking"] = {{"position_rms", r.position_rms},       {"position_max", r.position_max},
+                     {"orientation_rms", r.orientation_rms}, {"orientation_max", r.orientation_max},
+                     {"final_position_error", r.final_position_error}, {"samples", r.samples}};
+  }
   j["contact_steps"] = s.contact_steps;
   j["max_contact_force"] = s.max_contact_force;
   j["final_disturbance"] = s.final_disturbance;
@@ -380,6 +410,12 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.mean_residual = j.at("mean_residual").get<double>();
     // absent in summaries written before they existed
     s.reached = j.value("reached", false);
+    if (j.contains("tracking")) {
+      const auto& t = j.at("tracking");
+      s.tracking = TrackingResult{t.at("position_rms").get<double>(),    t.at("position_max").get<double>(),
+                                  t.at("orientation_rms").get<double>(), t.at("orientation_max").get<double>(),
+                                  t.at("final_position_error").get<double>(), t.at("samples").get<long>()};
+    }
     s.contact_steps = j.value("contact_steps", 0L);
     s.max_contact_force = j.value("max_contact_force", 0.0);
     s.final_disturbance = j.value("final_disturbance", std::vector<double>{});

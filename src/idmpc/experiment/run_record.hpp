@@ -3,14 +3,16 @@
 /// @brief The record of one closed-loop run, with one writer and one reader for each part
 /// (schema in docs/run_record.md):
 ///   - the per-step log (CSV): `t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,
-///     update_ms`, one row per control step: measured state, torque applied over [t, t + Δt),
-///     the torque commanded before clamping to the actuator limits (only for runs with limits),
-///     ‖F‖ at the start of the update, the update's wall time;
+///     update_ms[,x,y,z,x_ref,y_ref,z_ref]`, one row per control step: measured state, torque
+///     applied over [t, t + Δt), the torque commanded before clamping to the actuator limits (only
+///     for runs with limits), ‖F‖ at the start of the update, the update's wall time, and for runs
+///     with a frame target the frame's measured world position and its target at t;
 ///   - the summary (JSON): schema version, the task as run, outcome and timing.
 
 #include <cstddef>
 #include <iosfwd>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,14 +28,26 @@ inline constexpr int kRunRecordSchema = 1;
 class RunLogWriter {
  public:
   /// @param commanded whether the log has the commanded-torque columns uc*
-  RunLogWriter(std::ostream& out, int n, bool commanded);
+  /// @param frame whether it has a frame's position and target (x, y, z, x_ref, y_ref, z_ref)
+  RunLogWriter(std::ostream& out, int n, bool commanded, bool frame = false);
+  /// @brief One row; frame_position and frame_target (with `frame`; null: NaN) in world coordinates.
   void row(double t, const VecX<double>& q, const VecX<double>& v, const VecX<double>& u,
-           const VecX<double>& u_commanded, double residual, double update_ms);
+           const VecX<double>& u_commanded, double residual, double update_ms,
+           const Vec3<double>* frame_position = nullptr, const Vec3<double>* frame_target = nullptr);
 
  private:
   std::ostream& out_;
   int n_;
-  bool commanded_;
+  bool commanded_, frame_;
+};
+
+/// @brief The tracking error of a run with a frame target, over its control steps (measured on
+/// the plant).
+struct TrackingResult {
+  double position_rms = 0, position_max = 0;        ///< |p − p_ref| [m]
+  double orientation_rms = 0, orientation_max = 0;  ///< angle of R_refᵀR [rad]
+  double final_position_error = 0;                  ///< at the last measured state [m]
+  long samples = 0;
 };
 
 /// @brief Outcome and timing of a run (the JSON summary), with the task it ran.
@@ -60,6 +74,8 @@ struct RunSummary {
   /// @brief Whether the target was reached: max|q − q_ref| at the end below task.reach_tolerance,
   /// without divergence
   bool reached = false;
+  /// @brief With a frame target: its tracking error ("tracking" in the JSON; absent otherwise).
+  std::optional<TrackingResult> tracking;
   long contact_steps = 0;          ///< control steps with a contact in the plant
   double max_contact_force = 0;    ///< the largest contact normal force [N]
   std::vector<double> final_disturbance;  ///< the observer's d̂ at the end (offset-free tracking)
@@ -111,6 +127,9 @@ struct RunLog {
   std::vector<double> u_commanded;  ///< rows x nu, row-major, if the log has uc* columns
   std::vector<double> residual;   ///< rows
   std::vector<double> update_ms;  ///< rows
+  /// @brief With a frame target: its measured world position and its target, rows × 3 each,
+  /// row-major (empty otherwise)
+  std::vector<double> frame, frame_ref;
   /// @brief From the sibling summary when it was used: its path, the model it names (as run)
   /// and that model file's hash ("" if the summary has none); all "" otherwise
   std::string summary_path, summary_model, model_hash;

@@ -148,7 +148,8 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   if (!j.is_object()) throw std::invalid_argument(r.where + ": expected a JSON object");
   r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
            "simd_stages", "direct_torque", "actuate_every_joint", "implicit_damping", "friction_velocity",
-           "offset_free", "observer_time_constant", "reach_tolerance", "torque_limit", "weights", "cgmres"});
+           "offset_free", "observer_time_constant", "reach_tolerance", "torque_limit", "weights", "cgmres",
+           "target", "reference", "tracking_tolerance"});
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
@@ -164,7 +165,41 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
       t.q0_rule.clear();
     }
   }
-  r.get("qref", t.qref);
+  if (r.has("qref") && j.at("qref").is_string()) {
+    if (j.at("qref") != "q0") r.bad("qref", "a number, a list of joint positions or \"q0\"");
+    t.qref_start = true;
+    t.qref.clear();
+  } else if (r.has("qref")) {
+    r.get("qref", t.qref);
+    t.qref_start = false;
+  }
+  if (r.has("target")) {
+    const Reader g = r.sub("target");
+    g.known({"frame", "position", "orientation", "weights"});
+    FrameTask f;
+    if (!g.has("frame")) throw std::invalid_argument(g.where + ": field 'frame' (a site or body name) is missing");
+    g.get("frame", f.frame);
+    auto start_or = [&](const char* key, std::vector<double>& x, size_t size, const char* expected) {
+      if (!g.has(key) || g.j.at(key) == "start") return;
+      g.get(key, x);
+      if (x.size() != size) g.bad(key, expected);
+    };
+    start_or("position", f.position, 3, "[x, y, z] or \"start\"");
+    start_or("orientation", f.orientation, 4, "a quaternion [w, x, y, z] or \"start\"");
+    if (g.has("weights")) {
+      const Reader w = g.sub("weights");
+      w.known({"position", "orientation"});
+      w.get("position", f.position_weight);
+      w.get("orientation", f.orientation_weight);
+      if (f.position_weight.size() != 1 && f.position_weight.size() != 3) w.bad("position", "1 or 3 values");
+    }
+    t.target = f;
+  }
+  if (r.has("reference")) {
+    if (!j.at("reference").is_object()) r.bad("reference", "an object with a \"shape\"");
+    t.reference = j.at("reference");
+  }
+  r.get("tracking_tolerance", t.tracking_tolerance);
   r.get("duration", t.duration);
   r.get("formulation", t.formulation);
   r.get("derivatives", t.derivatives);
@@ -256,7 +291,16 @@ nlohmann::json to_json(const Task& t) {
   if (!t.description.empty()) j["description"] = t.description;
   j["model"] = t.model;
   j["q0"] = t.q0_rule.empty() ? json(t.q0) : json(t.q0_rule);
-  j["qref"] = t.qref;
+  j["qref"] = t.qref_start ? json("q0") : json(t.qref);
+  if (t.target) {
+    const FrameTask& f = *t.target;
+    j["target"] = {{"frame", f.frame},
+                   {"position", f.position.empty() ? json("start") : json(f.position)},
+                   {"orientation", f.orientation.empty() ? json("start") : json(f.orientation)},
+                   {"weights", {{"position", f.position_weight}, {"orientation", f.orientation_weight}}}};
+  }
+  if (!t.reference.is_null()) j["reference"] = t.reference;
+  j["tracking_tolerance"] = t.tracking_tolerance;
   j["duration"] = t.duration;
   j["formulation"] = t.formulation;
   j["derivatives"] = t.derivatives;

@@ -11,7 +11,7 @@
 ///   "model"        path of the MJCF/URDF file, relative to the task file's directory
 ///   "q0"           initial joint positions, one per joint, "swingup" = (−π, 0, …, 0) or
 ///                  "home" = the model's keyframe named home
-///   "qref"         target joint positions: a scalar or one per joint
+///   "qref"         target joint positions: a scalar, one per joint, or "q0" (the start)
 ///   "duration"     simulated seconds
 ///   "formulation"  "fd" or "id";  "derivatives": "matrix" or "adjoint"
 ///   "simd_stages"  evaluate horizon stages in SIMD lanes where they are independent: ID (stage
@@ -34,11 +34,22 @@
 ///   "weights"      {"Qq", "Qv", "Qa", "R"}: scalars, one per joint, or "auto" (scaled by the
 ///                  model's torque limits, see arm_weights); "Qa_fallback": the Q_a an ID run
 ///                  that diverges with Q_a = 0 is rerun with by `sweep` (0 = none)
+///   "target"       a target for a frame of the robot (a MuJoCo site or body), beside the joint
+///                  terms (Qq and qref then weigh the posture): {"frame": name, "position":
+///                  [x, y, z] or "start" (the frame's position at q0), "orientation": [w, x, y, z]
+///                  or "start", "weights": {"position": a scalar or 3 values [1/m²],
+///                  "orientation": w_o}} (cost.hpp: FrameTarget)
+///   "reference"    a reference that moves (experiment/trajectory_io.hpp: "shape": "circle",
+///                  "line", "waypoints" or "csv"): the frame target's position with a target,
+///                  else qref (one value per joint); it starts at the target's start value
+///   "tracking_tolerance" a frame target counts as reached when the position error [m] is
+///                  below it: its RMS over the run with a reference, at the end without
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
 ///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
 ///                  "shooting": "single" or "multiple" (DESIGN §9)}
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,6 +62,15 @@ namespace idmpc {
 
 inline constexpr const char* kTaskSchema = "idmpc-task/1";
 
+/// @brief A task's frame target as written (resolved on the model by mj::TaskRun).
+struct FrameTask {
+  std::string frame;                     ///< site or body name
+  std::vector<double> position;          ///< world [m]; empty: the frame's position at q0
+  std::vector<double> orientation;       ///< unit quaternion (w, x, y, z); empty: at q0
+  std::vector<double> position_weight = {1e4};  ///< 1 or 3 values [1/m²]
+  double orientation_weight = 10;
+};
+
 struct Task {
   std::string source;  ///< the task file it was read from, for messages
   std::string description;
@@ -58,6 +78,10 @@ struct Task {
   std::string q0_rule;             ///< "swingup", "home" or "" (then q0 holds the values)
   std::vector<double> q0;
   std::vector<double> qref;
+  bool qref_start = false;         ///< "qref": "q0": the start configuration
+  std::optional<FrameTask> target;
+  nlohmann::json reference;        ///< the "reference" object as written; null: none
+  double tracking_tolerance = 5e-3;
   double duration = 0;
   std::string formulation, derivatives;
   bool simd_stages = true;

@@ -120,8 +120,16 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start) {
   const double ramp = f.number("ramp", "a non-negative number [s]", false, 1.0);
   if (!(ramp >= 0)) f.bad("ramp", "a non-negative number [s]");
   Vec3<double> n = Vec3<double>::UnitX();
-  if (f.j.contains("normal")) {
-    n = f.vector("normal", 3, "a non-zero list of 3 numbers (the plane's normal)");
+  if (f.j.contains("normal") && f.j.at("normal") == "facing") {
+    // a vertical plane facing the base at the world origin: the normal along the start's
+    // horizontal direction from it
+    n = Vec3<double>(start[0], start[1], 0.0);
+    if (!(n.norm() > kDegenerate)) {
+      f.bad("normal", "[x, y, z], or \"facing\" with a start off the world's vertical axis");
+    }
+    n.normalize();
+  } else if (f.j.contains("normal")) {
+    n = f.vector("normal", 3, "a non-zero list of 3 numbers (the plane's normal) or \"facing\"");
     if (!(n.norm() > 0)) f.bad("normal", "a non-zero list of 3 numbers (the plane's normal)");
     n.normalize();
   }

@@ -6,11 +6,71 @@
 #include <random>
 #include <stdexcept>
 
+#include "idmpc/mujoco/load.hpp"
+
 namespace idmpc::mj {
 namespace {
 
 // a measured joint speed beyond this [rad/s or m/s] means the loop has blown up
 constexpr double kMaxSpeed = 1e4;
+
+// the tracking error of a run's steps, by MuJoCo's kinematics of the measured states
+class TrackingMeter {
+ public:
+  TrackingMeter(const mjModel* m, const TrackingSettings& s, int n)
+      : m_(m), s_(s), d_(s.frame() || s.joints ? make_data(m) : nullptr), q_ref_(n), rate_(n) {}
+
+  // the frame's position and target at (t, q), accumulated; false without a frame
+  bool measure(double t, const VecX<double>& q) {
+    if (!s_.frame()) return false;
+    Eigen::Map<VecX<double>>(d_->qpos, q.size()) = q;
+    mj_kinematics(m_, d_.get());
+    const mjtNum* x = s_.site >= 0 ? d_->site_xpos + 3 * s_.site : d_->xpos + 3 * s_.body;
+    const mjtNum* R = s_.site >= 0 ? d_->site_xmat + 9 * s_.site : d_->xmat + 9 * s_.body;
+    p_ = Eigen::Map<const Vec3<double>>(x);
+    if (s_.position) {
+      s_.position->sample(t, target_, rate3_);
+    } else {
+      target_ = s_.fixed_position;
+    }
+    const double e = (p_ - target_).norm();
+    const double angle = rotation_angle(Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(R), s_.rotation);
+    r_.position_max = std::max(r_.position_max, e);
+    r_.orientation_max = std::max(r_.orientation_max, angle);
+    position_sq_ += e * e;
+    orientation_sq_ += angle * angle;
+    r_.final_position_error = e;
+    ++r_.samples;
+    return true;
+  }
+  const Vec3<double>& position() const { return p_; }
+  const Vec3<double>& target() const { return target_; }
+
+  // max |q − q_ref| at t, q_ref moving or the controller's
+  double joint_error(double t, const VecX<double>& q, const Controller& c) {
+    if (!s_.joints) return (q - c.q_ref()).cwiseAbs().maxCoeff();
+    s_.joints->sample(t, q_ref_, rate_);
+    return (q - q_ref_).cwiseAbs().maxCoeff();
+  }
+
+  std::optional<TrackingResult> result() const {
+    if (!s_.frame()) return std::nullopt;
+    TrackingResult r = r_;
+    const double k = std::max<double>(1.0, static_cast<double>(r.samples));
+    r.position_rms = std::sqrt(position_sq_ / k);
+    r.orientation_rms = std::sqrt(orientation_sq_ / k);
+    return r;
+  }
+
+ private:
+  const mjModel* m_;
+  const TrackingSettings& s_;
+  DataPtr d_;
+  Vec3<double> p_ = Vec3<double>::Zero(), target_ = Vec3<double>::Zero(), rate3_;
+  VecX<double> q_ref_, rate_;
+  TrackingResult r_;
+  double position_sq_ = 0, orientation_sq_ = 0;
+};
 
 }  // namespace
 
@@ -53,6 +113,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   result.update_ms.reserve(static_cast<size_t>(std::min(steps, kept)));
   std::mt19937_64 sampler(0x1d3c);  // reservoir sampling beyond `kept`, reproducible
   VecX<double> q = plant.q(), v = plant.v();
+  TrackingMeter meter(plant.model(), settings.tracking, n);
   // the torque applied over the current period; the controller's output applies over the next
   VecX<double> tau = controller.initialize(q, v), tau_cmd = controller.commanded_torque();
   result.init_residual = controller.residual_norm();
@@ -64,7 +125,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     result.divergence_reason = controller.failure();
     result.final_q = q;
     result.final_v = v;
-    result.final_q_error = (q - controller.q_ref()).cwiseAbs().maxCoeff();
+    result.final_q_error = meter.joint_error(0, q, controller);
     result.final_v_norm = v.norm();
     return result;
   }
@@ -75,6 +136,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     const double t = static_cast<double>(k) * dt;
     q = plant.q();
     v = plant.v();
+    const bool tracked = meter.measure(t, q);
     // one control update at t: the torque for t + Δt
     const auto start = std::chrono::steady_clock::now();
     const bool ok = controller.update(t, q, v);
@@ -82,7 +144,8 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
 
     std::string reason = ok ? "" : controller.failure();
     // the row holds the measured state, the torque applied over [t, t + Δt) and this update
-    on_step(StepRecord{t, q, v, tau, tau_cmd, controller.residual_norm(), ms});
+    on_step(StepRecord{t, q, v, tau, tau_cmd, controller.residual_norm(), ms, tracked ? &meter.position() : nullptr,
+                       tracked ? &meter.target() : nullptr});
     result.steps = static_cast<int>(k + 1);
     if (reason.empty()) {
       ++result.updates;
@@ -134,7 +197,10 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   // after a divergence the plant may have been reset: the last measured state is the outcome
   result.final_q = result.diverged ? q : plant.q();
   result.final_v = result.diverged ? v : plant.v();
-  result.final_q_error = (result.final_q - controller.q_ref()).cwiseAbs().maxCoeff();
+  const double t_end = static_cast<double>(result.diverged ? result.steps - 1 : result.steps) * dt;
+  result.final_q_error = meter.joint_error(t_end, result.final_q, controller);
+  if (!result.diverged) meter.measure(t_end, result.final_q);  // the state the run ends in
+  result.tracking = meter.result();
   result.final_v_norm = result.final_v.norm();
   result.contact_steps = plant.contact_steps();
   result.max_contact_force = plant.max_contact_force();

@@ -5,9 +5,12 @@
 
 #include <functional>
 #include <limits>
+#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "idmpc/experiment/run_record.hpp"
 #include "idmpc/mujoco/plant.hpp"
 #include "idmpc/solver/controller.hpp"
 
@@ -18,11 +21,25 @@ inline constexpr long kKeptUpdateTimes = 1L << 20;
 /// @brief Control steps a run may have at most (11.6 days at 1 kHz).
 inline constexpr double kMaxSteps = 1e9;
 
+/// @brief What a run's tracking error is measured against, on the plant: a frame (a MuJoCo site or
+/// body, by MuJoCo's kinematics of the measured q) and its target at each step's time, and a
+/// moving joint target.
+struct TrackingSettings {
+  int site = -1;                 ///< the frame as a site of the plant's model, or
+  int body = -1;                 ///< as a body (when site < 0); both < 0: no frame
+  std::shared_ptr<const Trajectory> position;   ///< p_ref(t); null: `fixed_position`
+  Vec3<double> fixed_position = Vec3<double>::Zero();
+  Mat3<double> rotation = Mat3<double>::Identity();  ///< R_ref
+  std::shared_ptr<const Trajectory> joints;     ///< q_ref(t); null: the controller's fixed target
+  bool frame() const { return site >= 0 || body >= 0; }
+};
+
 struct ClosedLoopSettings {
   double duration = 10.0;
   VecX<double> q0, v0;
   bool phase_timing = true;  ///< split each update's time into rollout/costate/GMRES
   long kept_update_times = kKeptUpdateTimes;  ///< RunResult::update_ms keeps at most this many
+  TrackingSettings tracking;  ///< what the tracking error is measured against (none by default)
 };
 
 /// @brief One control step as logged: measured state, the torque the plant applied over
@@ -36,6 +53,10 @@ struct StepRecord {
   const VecX<double>& u_commanded;
   double residual;
   double update_ms;
+  /// @brief With a frame target (TrackingSettings): the frame's measured position and its target
+  /// at t; null otherwise.
+  const Vec3<double>* frame_position = nullptr;
+  const Vec3<double>* frame_target = nullptr;
 };
 
 struct RunResult {
@@ -64,7 +85,9 @@ struct RunResult {
   long contact_steps = 0;         ///< control steps with a contact in the plant (Plant::contact_steps)
   double max_contact_force = 0;   ///< the largest contact normal force [N]
   VecX<double> final_disturbance;  ///< the controller's estimate d̂ at the end (zero without observer)
-  /// @brief max |q_i − q_ref,i| at the end; after a divergence, of the last measured state
+  /// @brief With a frame target: the tracking error (TrackingSettings).
+  std::optional<TrackingResult> tracking;
+  /// @brief max |q_i − q_ref,i| at the end (q_ref at the end's time for a moving target); after a divergence, of the last measured state
   /// (before MuJoCo's reset of a blown-up simulation)
   double final_q_error = 0;
   double final_v_norm = 0;

@@ -1,6 +1,10 @@
 #include "idmpc/mujoco/task_run.hpp"
 
+#include "idmpc/dynamics/kinematics.hpp"
+#include "idmpc/experiment/trajectory_io.hpp"
+
 #include <cmath>
+#include <filesystem>
 #include <limits>
 #include <utility>
 
@@ -41,6 +45,8 @@ TaskRun::TaskRun(const Task& task)
   const mjModel* m = loaded_.model.get();
   const int n = model_->n;
   if (resolved_.q0.size() == 0) resolved_.q0 = keyframe_qpos(m, task.q0_rule, task.model);
+  if (task.qref_start) resolved_.qref = resolved_.q0;
+  set_up_references();
 
   // the actuators' ranges, narrowed by the task's limit: constraints of the horizon (DESIGN §8)
   // and the clamp of every torque the plant receives
@@ -64,6 +70,8 @@ TaskRun::TaskRun(const Task& task)
   cs.cgmres = resolved_.cgmres;
   cs.weights = setup_->weights;
   cs.q_ref = resolved_.qref;
+  cs.frame_target = frame_target_;
+  (frame_target_ ? cs.frame_reference : cs.joint_reference) = reference_;
   cs.torque_lower = lower_;
   cs.torque_upper = upper_;
   cs.observer_time_constant = task.offset_free ? task.observer_time_constant : 0.0;
@@ -90,11 +98,62 @@ TaskRun::TaskRun(const Task& task)
   if (!timestep_warning.empty()) warnings_.push_back(timestep_warning);
 }
 
+void TaskRun::set_up_references() {
+  const Task& task = task_;
+  const std::string where = "task '" + (task.source.empty() ? std::string("(given)") : task.source) + "'";
+  const std::string base_dir = std::filesystem::path(task.source).parent_path().string();
+  VecX<double> start = resolved_.qref;
+  if (task.target) {
+    const FrameTask& f = *task.target;
+    const mjModel* m = loaded_.model.get();
+    FrameTarget target;
+    target.frame = import_frame(m, f.frame, task.model);
+    const std::string field = where + " field 'target'";
+    if (f.position_weight.size() == 1) {
+      target.position_weight.setConstant(f.position_weight[0]);
+    } else {
+      target.position_weight = Eigen::Map<const Vec3<double>>(f.position_weight.data());
+    }
+    target.orientation_weight = f.orientation_weight;
+    // "start": the frame's pose at q0
+    FrameKinematics<double> fk(*model_, target.frame);
+    fk.compute(*model_, resolved_.q0);
+    target.position = f.position.empty() ? fk.position() : Vec3<double>(Eigen::Map<const Vec3<double>>(f.position.data()));
+    if (f.orientation.empty()) {
+      target.rotation = fk.rotation();
+    } else {
+      const Eigen::Quaterniond quat(f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3]);
+      if (!(std::abs(quat.norm() - 1.0) < 1e-6)) {
+        throw std::invalid_argument(field + ": orientation [w, x, y, z] must be a unit quaternion, its norm is " +
+                                    std::to_string(quat.norm()));
+      }
+      target.rotation = quat.toRotationMatrix();
+    }
+    // checked by the problem as well, named here as the task field
+    if (!(target.position_weight.array() >= 0).all() || !target.position_weight.allFinite() ||
+        !(target.orientation_weight >= 0) || !std::isfinite(target.orientation_weight)) {
+      throw std::invalid_argument(field + ": weights must be finite and non-negative");
+    }
+    if (!target.position.allFinite()) throw std::invalid_argument(field + ": position must be finite");
+    frame_target_ = target;
+    start = target.position;
+    tracking_.rotation = target.rotation;
+    tracking_.fixed_position = target.position;
+    tracking_.site = mj_name2id(m, mjOBJ_SITE, f.frame.c_str());
+    if (tracking_.site < 0) tracking_.body = mj_name2id(m, mjOBJ_BODY, f.frame.c_str());
+  }
+  if (!task.reference.is_null()) {
+    reference_ = trajectory_from_json(task.reference, where + " field 'reference'", start, base_dir);
+    (task.target ? tracking_.position : tracking_.joints) = reference_;
+  }
+}
+
 ClosedLoopSettings TaskRun::loop_settings() const {
   ClosedLoopSettings ls;
   ls.duration = task_.duration;
   ls.q0 = resolved_.q0;
   ls.v0 = VecX<double>::Zero(n());
+  ls.tracking = tracking_;
   return ls;
 }
 
@@ -133,7 +192,14 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.unmodeled = imported_.unmodeled;
   s.notices = notices_;
   s.warnings = warnings_;
-  s.reached = !s.diverged && s.final_q_error < task_.reach_tolerance;
+  s.tracking = result.tracking;
+  if (result.tracking) {
+    // a frame target: the position error, over the run when it moves, else at the end
+    const double e = reference_ ? result.tracking->position_rms : result.tracking->final_position_error;
+    s.reached = !s.diverged && e < task_.tracking_tolerance;
+  } else {
+    s.reached = !s.diverged && s.final_q_error < task_.reach_tolerance;
+  }
   s.contact_steps = result.contact_steps;
   s.max_contact_force = result.max_contact_force;
   s.final_disturbance.assign(result.final_disturbance.data(),

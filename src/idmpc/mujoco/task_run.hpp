@@ -75,7 +75,15 @@ class TaskRun {
   /// timings and outcome. `log_path`: the run's CSV log, hashed for `render` (empty: none).
   RunSummary summary(const RunResult& result, const std::string& log_path = "") const;
 
+ /// @brief The frame target of the task (none without "target") and its moving reference, or
+  /// the moving joint reference (null: none).
+  const std::optional<FrameTarget>& frame_target() const { return frame_target_; }
+  const std::shared_ptr<const Trajectory>& reference() const { return reference_; }
+
  private:
+  // the task's frame target, reference and what the tracking error is measured against
+  void set_up_references();
+
   Task task_;
   LoadedModel loaded_;
   ImportedModel imported_;
@@ -86,6 +94,9 @@ class TaskRun {
   std::unique_ptr<const HorizonSetup> setup_;
   std::unique_ptr<Controller> controller_;
   std::vector<std::string> unbounded_, notices_, warnings_;
+  std::optional<FrameTarget> frame_target_;
+  std::shared_ptr<const Trajectory> reference_;
+  TrackingSettings tracking_;
 };
 
 /// @brief MuJoCo's friction loss per dof (zero where the model disables it).
