@@ -94,6 +94,10 @@ class OcpProblem {
   /// @brief A frame target (cost.hpp) or none, and its position moving as p_ref(t) (null: fixed).
   void set_frame_target(std::optional<FrameTarget> target) { terms_.set_frame_target(std::move(target)); }
   void set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref) { terms_.set_frame_trajectory(std::move(p_ref)); }
+  /// @brief The fixed frame target's pose (needs a frame target), without allocating: between updates.
+  void set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation) {
+    terms_.set_frame_pose(position, rotation);
+  }
   /// @brief The references every stage sees (StageTerms): q_ref(i), v_ref(i), u_ref(i), frame.
   const StageTerms& terms() const { return terms_; }
   /// @brief Stage i's references at t0 + i·Δτ (what moves; nothing when nothing does).

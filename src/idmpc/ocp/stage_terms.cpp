@@ -136,8 +136,9 @@ void StageTerms::set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref) {
 
 void StageTerms::set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation) {
   if (!frame_) throw std::invalid_argument("set_frame_pose: the problem has no frame target");
-  if (!position.allFinite() || !rotation.allFinite()) {
-    throw std::invalid_argument(frame_label(frame_->frame) + ": position or rotation is not finite");
+  if (!position.allFinite()) throw std::invalid_argument(frame_label(frame_->frame) + ": position is not finite");
+  if (!rotation.allFinite() || !(rotation.transpose() * rotation).isIdentity(1e-9) || rotation.determinant() < 0) {
+    throw std::invalid_argument(frame_label(frame_->frame) + ": rotation is not a rotation matrix");
   }
   frame_->position = position;
   frame_->rotation = rotation;

@@ -99,6 +99,11 @@ class Controller {
   /// @brief A new target q_ref from the next update on (the torque reference ID(q_ref, 0, 0)
   /// follows). Size n, finite; allocation-free.
   void set_target(const Vec& q_ref);
+  /// @brief A new pose for the frame target from the next update on (ControllerSettings::
+  /// frame_target needed; a frame reference, if any, keeps moving the position). Allocation-free.
+  void set_frame_target(const Vec3<double>& position, const Mat3<double>& rotation) {
+    nlp_.problem().set_frame_pose(position, rotation);
+  }
   const Vec& torque_lower() const { return lower_; }
   const Vec& torque_upper() const { return upper_; }
 
