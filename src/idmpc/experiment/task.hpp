@@ -68,7 +68,7 @@ struct FrameTask {
   std::vector<double> position;          ///< world [m]; empty: the frame's position at q0
   std::vector<double> orientation;       ///< unit quaternion (w, x, y, z); empty: at q0
   std::vector<double> position_weight = {1e4};  ///< 1 or 3 values [1/m²]
-  double orientation_weight = 10;
+  double orientation_weight = 100;
 };
 
 struct Task {
