@@ -14,7 +14,9 @@ namespace py = pybind11;
 
 /// Model, load_model and the dynamics kernels (rnea, aba, crba and their derivatives)
 void bind_model(py::module_& m);
-/// Task, load_task, paper_task, arm_defaults, task_from_dict
+/// Frame, load_frame, frame_kinematics, FrameTarget, rotation_angle, the trajectories
+void bind_tracking(py::module_& m);
+/// Task, FrameTask, load_task, paper_task, arm_defaults, task_from_dict
 void bind_task(py::module_& m);
 /// ControllerSettings, Controller, Plant, TaskRun, run_task
 void bind_control(py::module_& m);

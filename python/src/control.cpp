@@ -22,6 +22,7 @@ using Vector = VecX<double>;
 struct Rows {
   int n = 0;
   std::vector<double> t, q, v, u, u_commanded, residual, update_ms;
+  std::vector<double> frame_position, frame_target;  // with a frame target: 3 per step
 
   void add(const mj::StepRecord& s) {
     t.push_back(s.t);
@@ -31,6 +32,10 @@ struct Rows {
     u_commanded.insert(u_commanded.end(), s.u_commanded.data(), s.u_commanded.data() + n);
     residual.push_back(s.residual);
     update_ms.push_back(s.update_ms);
+    if (s.frame_position && s.frame_target) {
+      frame_position.insert(frame_position.end(), s.frame_position->data(), s.frame_position->data() + 3);
+      frame_target.insert(frame_target.end(), s.frame_target->data(), s.frame_target->data() + 3);
+    }
   }
 };
 
@@ -62,6 +67,10 @@ py::dict run_task_run(mj::TaskRun& run) {
   d["u_commanded"] = to_array(rows.u_commanded, n);
   d["residual"] = to_array(rows.residual);
   d["update_ms"] = to_array(rows.update_ms);
+  if (run.frame_target()) {
+    d["frame_position"] = to_array(rows.frame_position, 3);
+    d["frame_target"] = to_array(rows.frame_target, 3);
+  }
   d["updates"] = result.updates;
   d["summary"] = json_loads(to_json(summary).dump());
   return d;
@@ -70,6 +79,11 @@ py::dict run_task_run(mj::TaskRun& run) {
 std::shared_ptr<Model> mutable_model(std::shared_ptr<const Model> model) {
   // Model's members are all const: the Python object may share it without a copy
   return std::const_pointer_cast<Model>(std::move(model));
+}
+
+// trajectories are immutable for Python too (no setters): shared without a copy
+std::shared_ptr<Trajectory> mutable_trajectory(std::shared_ptr<const Trajectory> trajectory) {
+  return std::const_pointer_cast<Trajectory>(std::move(trajectory));
 }
 
 }  // namespace
@@ -113,6 +127,19 @@ void bind_control(py::module_& m) {
       .def_readwrite("cgmres", &ControllerSettings::cgmres)
       .def_readwrite("weights", &ControllerSettings::weights)
       .def_readwrite("q_ref", &ControllerSettings::q_ref)
+      .def_property(
+          "joint_reference", [](const ControllerSettings& s) { return mutable_trajectory(s.joint_reference); },
+          [](ControllerSettings& s, std::shared_ptr<Trajectory> r) { s.joint_reference = std::move(r); },
+          "a moving joint target q_ref(t), n values (its rate the velocity reference); None: q_ref")
+      .def_property(
+          "frame_target", [](const ControllerSettings& s) { return s.frame_target; },
+          [](ControllerSettings& s, std::optional<FrameTarget> target) { s.frame_target = std::move(target); },
+          "a FrameTarget beside the joint terms (Q_q and q_ref then weigh the posture), or None (a copy: "
+          "assign a whole FrameTarget)")
+      .def_property(
+          "frame_reference", [](const ControllerSettings& s) { return mutable_trajectory(s.frame_reference); },
+          [](ControllerSettings& s, std::shared_ptr<Trajectory> r) { s.frame_reference = std::move(r); },
+          "the frame target's position moving as p_ref(t) (3 values); None: frame_target.position")
       .def_readwrite("torque_lower", &ControllerSettings::torque_lower, "empty: unbounded; -inf per joint: unbounded")
       .def_readwrite("torque_upper", &ControllerSettings::torque_upper, "empty: unbounded; +inf per joint: unbounded")
       .def_readwrite("limits_in_horizon", &ControllerSettings::limits_in_horizon,
@@ -171,6 +198,13 @@ void bind_control(py::module_& m) {
             c.set_target(q_ref);
           },
           py::arg("q_ref"), "A new target from the next update on.")
+      .def("set_frame_target", &Controller::set_frame_target, py::arg("position"), py::arg("rotation"),
+           "A new pose for the frame target from the next update on (a frame reference, if any, keeps moving "
+           "the position). ValueError without a frame target, for a non-finite position or a rotation that is "
+           "not one.")
+      .def(
+          "frame_target", [](const Controller& c) { return c.problem().terms().frame_target(); },
+          "the frame target the horizon weighs (a copy), or None")
       .def("set_torque_limits", &Controller::set_torque_limits, py::arg("lower"), py::arg("upper"))
       .def("torque_lower", [](const Controller& c) -> Vector { return c.torque_lower(); })
       .def("torque_upper", [](const Controller& c) -> Vector { return c.torque_upper(); })
@@ -221,12 +255,27 @@ void bind_control(py::module_& m) {
       .def_property_readonly("torque_lower", [](const mj::TaskRun& r) -> Vector { return r.torque_lower(); })
       .def_property_readonly("torque_upper", [](const mj::TaskRun& r) -> Vector { return r.torque_upper(); })
       .def_property_readonly("unbounded_joints", &mj::TaskRun::unbounded_joints)
+      .def_property_readonly(
+          "frame_target", [](const mj::TaskRun& r) { return r.frame_target(); },
+          "the task's frame target resolved on the model (\"start\" filled in; a copy), or None")
+      .def_property_readonly(
+          "reference", [](const mj::TaskRun& r) { return mutable_trajectory(r.reference()); },
+          "the task's moving reference (the frame target's position with a target, else the joint target), "
+          "or None")
+      .def(
+          "frame",
+          [](const mj::TaskRun& r, const std::string& name) {
+            return mj::import_frame(r.mj_model(), name, r.task().model);
+          },
+          py::arg("name"), "The Frame of the site or body called name on the run's model (as load_frame).")
       .def_property_readonly("notices", &mj::TaskRun::notices)
       .def_property_readonly("warnings", &mj::TaskRun::warnings)
       .def("run", &run_task_run,
            "The task's closed loop from (q0, 0) for task.duration; a dict of numpy arrays t, residual, update_ms "
-           "(steps,), q, v, u, u_commanded (steps x n), updates (the successful updates) and summary (the run summary as a dict). The GIL is "
-           "released while it runs.");
+           "(steps,), q, v, u, u_commanded (steps x n), with a frame target frame_position and frame_target "
+           "(steps x 3: the frame measured on the plant and its target at t), updates (the successful updates) "
+           "and summary (the run summary as a dict, with \"tracking\" for a frame target). The GIL is released "
+           "while it runs.");
 
   m.def(
       "run_task", [](const Task& task) { mj::TaskRun run(task); return run_task_run(run); }, py::arg("task"),

@@ -71,6 +71,7 @@ PYBIND11_MODULE(idmpc, m) {
   m.def("set_data_dir", &idmpc::set_data_dir, pybind11::arg("dir"),
         "Sets the directory holding mjcf/ for this process (ValueError if it has none)");
   idmpc::python::bind_model(m);
+  idmpc::python::bind_tracking(m);
   idmpc::python::bind_task(m);
   idmpc::python::bind_control(m);
 }

@@ -1,6 +1,9 @@
 // Task (the fields of a task file as attributes), its files and its dict form. The dict form
 // is the task file's JSON (to_json, task_from_json) through Python's json module.
 
+#include <optional>
+#include <vector>
+
 #include <pybind11/stl.h>
 
 #include "bindings.hpp"
@@ -23,6 +26,27 @@ Task task_from_dict(const py::handle& d, const Task* base) {
 }  // namespace
 
 void bind_task(py::module_& m) {
+  py::class_<FrameTask>(m, "FrameTask",
+                        "A task's frame target as written (the task file's \"target\", docs/tasks.md); TaskRun "
+                        "resolves it on the model (TaskRun.frame_target). List fields are copied out: assign a "
+                        "whole list.")
+      .def(py::init([](std::string frame, std::vector<double> position, std::vector<double> orientation,
+                       std::vector<double> position_weight, double orientation_weight) {
+             return FrameTask{std::move(frame), std::move(position), std::move(orientation),
+                              std::move(position_weight), orientation_weight};
+           }),
+           py::arg("frame"), py::arg("position") = std::vector<double>{},
+           py::arg("orientation") = std::vector<double>{}, py::arg("position_weight") = FrameTask{}.position_weight,
+           py::arg("orientation_weight") = FrameTask{}.orientation_weight)
+      .def(py::init<const FrameTask&>(), py::arg("other"), "A copy of other.")
+      .def_readwrite("frame", &FrameTask::frame, "site or body name")
+      .def_readwrite("position", &FrameTask::position, "[x, y, z] world [m]; empty: the frame's position at q0")
+      .def_readwrite("orientation", &FrameTask::orientation,
+                     "unit quaternion [w, x, y, z]; empty: the frame's orientation at q0")
+      .def_readwrite("position_weight", &FrameTask::position_weight, "1 or 3 values [1/m^2]")
+      .def_readwrite("orientation_weight", &FrameTask::orientation_weight)
+      .def("__repr__", [](const FrameTask& t) { return "<idmpc.FrameTask '" + t.frame + "'>"; });
+
   py::class_<Task>(m, "Task",
                    "An experiment as data: model, initial and target positions, duration, formulation, "
                    "weights and C/GMRES settings (the fields of a task file, docs/tasks.md). Vector fields "
@@ -37,6 +61,23 @@ void bind_task(py::module_& m) {
       .def_readwrite("q0_rule", &Task::q0_rule, "\"swingup\", \"home\" or \"\" (then q0 holds the values)")
       .def_readwrite("q0", &Task::q0)
       .def_readwrite("qref", &Task::qref, "target joint positions: one value for all or one per joint")
+      .def_readwrite("qref_start", &Task::qref_start, "qref \"q0\": the target is the start configuration")
+      .def_property(
+          "target", [](const Task& t) { return t.target; },
+          [](Task& t, std::optional<FrameTask> target) { t.target = std::move(target); },
+          "a FrameTask or None (a copy: assign a whole FrameTask)")
+      .def_property(
+          "reference", [](const Task& t) { return json_loads(t.reference.dump()); },
+          [](Task& t, const py::handle& d) {
+            try {
+              t.reference = nlohmann::json::parse(json_dumps(d));
+            } catch (const nlohmann::json::exception& e) {
+              throw std::invalid_argument(std::string("reference: expected JSON, got a parse error: ") + e.what());
+            }
+          },
+          "the \"reference\" object as a dict (a copy: assign a whole dict), or None")
+      .def_readwrite("tracking_tolerance", &Task::tracking_tolerance,
+                     "a frame target counts as reached below this position error [m]")
       .def_readwrite("duration", &Task::duration, "simulated seconds")
       .def_readwrite("formulation", &Task::formulation, "\"fd\" or \"id\"")
       .def_readwrite("derivatives", &Task::derivatives, "\"matrix\" or \"adjoint\"")
