@@ -2,6 +2,7 @@
 // record's one writer and one reader (a summary and a log survive a round trip unchanged).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -235,6 +236,50 @@ TEST(RunRecord, LogWrittenIsLogRead) {
     EXPECT_TRUE(std::isnan(log.residual[1]));
     EXPECT_DOUBLE_EQ(log.update_ms[1], 0.3);
     EXPECT_EQ(log.label, "run");
+  }
+}
+
+TEST(RunRecord, FrameColumnsAreRead) {
+  TempDir dir;
+  std::ostringstream text;
+  {
+    RunLogWriter w(text, 2, false, true);
+    const VecX<double> q = VecX<double>::Constant(2, 0.1), v = q, u = q, uc = q;
+    const Vec3<double> p0(0.5, 0.1, 0.4), r0(0.5, 0.1, 0.45), p1(0.6, -0.2, 0.3), r1(0.61, -0.2, 0.3);
+    w.row(0.0, q, v, u, uc, 1e-3, 0.2, &p0, &r0);
+    w.row(0.001, q, v, u, uc, 1e-3, 0.2, &p1, &r1);
+    w.row(0.002, q, v, u, uc, 1e-3, 0.2);  // no measurement: NaN
+  }
+  EXPECT_EQ(text.str().substr(0, text.str().find('\n')),
+            "t,q0,q1,v0,v1,u0,u1,residual,update_ms,x,y,z,x_ref,y_ref,z_ref");
+  const RunLog log = read_run_log(dir.write("frame.csv", text.str()));
+  ASSERT_EQ(log.rows(), 3u);
+  ASSERT_EQ(log.frame.size(), 9u);
+  ASSERT_EQ(log.frame_ref.size(), 9u);
+  EXPECT_DOUBLE_EQ(log.frame[2], 0.4);
+  EXPECT_DOUBLE_EQ(log.frame_ref[2], 0.45);
+  EXPECT_DOUBLE_EQ(log.frame[4], -0.2);
+  EXPECT_DOUBLE_EQ(log.frame_ref[3], 0.61);
+  EXPECT_TRUE(std::isnan(log.frame[6]) && std::isnan(log.frame_ref[8]));
+  // the columns before them are read as without them
+  EXPECT_DOUBLE_EQ(log.residual[1], 1e-3);
+  EXPECT_DOUBLE_EQ(log.update_ms[1], 0.2);
+
+  // a log without them has none
+  const RunLog plain = read_run_log(dir.write("plain.csv", "t,q0,v0,u0,residual,update_ms\n0,0,0,0,0,0\n"));
+  EXPECT_EQ(plain.rows(), 1u);
+  EXPECT_TRUE(plain.frame.empty());
+  EXPECT_TRUE(plain.frame_ref.empty());
+
+  // some of them, or them out of order, is a bad header
+  for (const std::string extra : {",x,y,z", ",x,y,z,x_ref,y_ref", ",x_ref,y_ref,z_ref,x,y,z", ",x,y,z,x_ref,y_ref,z_ref,w"}) {
+    const int cells = 6 + static_cast<int>(std::count(extra.begin(), extra.end(), ','));
+    std::string row = "0";
+    for (int c = 1; c < cells; ++c) row += ",0";
+    const std::string path = dir.write("partial.csv", "t,q0,v0,u0,residual,update_ms" + extra + "\n" + row + "\n");
+    const std::string msg = message_of([&] { read_run_log(path); });
+    EXPECT_NE(msg.find("line 1: bad header"), std::string::npos) << extra << ": " << msg;
+    EXPECT_NE(msg.find("x_ref"), std::string::npos) << msg;  // the expected shape names them
   }
 }
 

@@ -29,12 +29,14 @@
 #include <nlohmann/json.hpp>
 
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/render/frame_path.hpp"
 #include "idmpc/render/framing.hpp"
 #include "idmpc/render/gl_context.hpp"
 #include "idmpc/render/overlay.hpp"
 #include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/run_log.hpp"
 #include "idmpc/render/run_overlay.hpp"
+#include "idmpc/render/scene_dressing.hpp"
 #include "idmpc/render/video.hpp"
 #include "idmpc/render/video_writer.hpp"
 
@@ -700,6 +702,188 @@ TEST_F(RenderTest, CompareVideoLeavesStaticGeometryUntinted) {
   EXPECT_GE(count_hue(rgb, to_hsv(0.7, 0.2, 0.95).h), 40) << "the mocap target was recoloured";
   EXPECT_GE(count_hue(rgb, to_hsv(0.18, 0.48, 1.0).h), 40) << "no blue (first) arm";
   EXPECT_GE(count_hue(rgb, to_hsv(1.0, 0.52, 0.08).h), 40) << "no orange (second) arm";
+}
+
+// ------------------------------------------------------------------------------- frame paths
+
+const std::string kUr5e = IDMPC_SOURCE_DIR "/mjcf/ur5e.xml";
+
+// the UR5e at its home keyframe, still for `duration` s, its tool point ('tip') on a vertical
+// circle of `radius` m below where it starts, run `laps` times; the tool lags the target by
+// a tenth of a lap
+RunLog ur5e_circle_log(const mjModel* m, double duration, double radius, double laps) {
+  const int key = mj_name2id(m, mjOBJ_KEY, "home");
+  const int tip = mj_name2id(m, mjOBJ_SITE, "tip");
+  EXPECT_GE(key, 0);
+  EXPECT_GE(tip, 0);
+  mj::DataPtr data = mj::make_data(m);
+  std::copy(m->key_qpos + key * m->nq, m->key_qpos + (key + 1) * m->nq, data->qpos);
+  mj_fwdPosition(m, data.get());
+  const double* p0 = data->site_xpos + 3 * tip;
+  RunLog log;
+  log.path = "ur5e_circle.csv";
+  log.label = "circle";
+  log.n = log.nu = m->nq;
+  const double dt = 1e-2;
+  const int steps = static_cast<int>(std::lround(duration / dt));
+  for (int k = 0; k <= steps; ++k) {
+    const double t = k * dt;
+    log.t.push_back(t);
+    log.q.insert(log.q.end(), data->qpos, data->qpos + m->nq);
+    log.u.insert(log.u.end(), static_cast<std::size_t>(m->nq), 0.0);
+    log.residual.push_back(1e-4);
+    log.update_ms.push_back(0.5);
+    // in the y-z plane through the tip, the circle's top at the tip
+    auto circle = [&](std::vector<double>& out, double phase) {
+      const double a = 2 * kPi * laps * std::max(phase, 0.0);
+      out.insert(out.end(), {p0[0], p0[1] + radius * std::sin(a), p0[2] - radius + radius * std::cos(a)});
+    };
+    circle(log.frame_ref, t / duration);
+    circle(log.frame, t / duration - 0.1 / laps);
+  }
+  return log;
+}
+
+RunLog without_frame(RunLog log) {
+  log.frame.clear();
+  log.frame_ref.clear();
+  return log;
+}
+
+bool same_rgb(const float* rgba, const Rgb& rgb) {
+  return std::fabs(rgba[0] - rgb[0]) < 1e-6f && std::fabs(rgba[1] - rgb[1]) < 1e-6f &&
+         std::fabs(rgba[2] - rgb[2]) < 1e-6f;
+}
+
+// MuJoCo's abstract scene of a model, freed with it
+struct TestScene {
+  mjvScene scn;
+  TestScene(const mjModel* m, int maxgeom) {
+    mjv_defaultScene(&scn);
+    mjv_makeScene(m, &scn, maxgeom);
+  }
+  ~TestScene() { mjv_freeScene(&scn); }
+};
+
+// the paths' geoms appended to a scene of the arm: dots and a marker in the target's colour,
+// capsules of the trail up to the row; nothing for a log without frame columns
+TEST_F(RenderTest, FramePathAddsItsGeomsOnlyForLogsWithFrameColumns) {
+  mj::ModelPtr model = mj::load_model(kUr5e);
+  const mjModel* m = model.get();
+  constexpr double kRadius = 0.05, kLaps = 3, kTrail = 0.002;
+  const RunLog log = ur5e_circle_log(m, 3.0, kRadius, kLaps);
+  ASSERT_TRUE(has_frame_path(log));
+  mj::DataPtr data = mj::make_data(m);
+  mjvOption opt;
+  mjv_defaultOption(&opt);
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  TestScene scene(m, m->ngeom + 2000);
+  mjvScene& scn = scene.scn;
+  auto arm = [&] {
+    std::copy(log.q_row(0), log.q_row(0) + m->nq, data->qpos);
+    mj_fwdPosition(m, data.get());
+    mjv_updateScene(m, data.get(), &opt, nullptr, &cam, mjCAT_ALL, &scn);
+    return scn.ngeom;
+  };
+
+  // without frame columns: no paths
+  const RunLog plain = without_frame(log);
+  const FramePath none(plain, kTrail);
+  EXPECT_TRUE(none.empty());
+  EXPECT_EQ(none.max_geoms(), 0);
+  const int model_geoms = arm();
+  none.add(scn, plain.rows() - 1, true, kToolPath);
+  EXPECT_EQ(scn.ngeom, model_geoms);
+
+  // with them: one chain of dots around the circle, though it is run three times
+  const FramePath path(log, kTrail);
+  ASSERT_FALSE(path.empty());
+  const std::size_t dots = path.target_dots().size();
+  const double circumference = 2 * kPi * kRadius;
+  EXPECT_GE(dots, 8u);
+  EXPECT_LE(static_cast<double>(dots), circumference / (0.75 * 4 * path.dot_radius()) + 1);
+  for (const Vec3& p : path.target_dots()) {
+    const double* p0 = log.frame_ref.data();  // the circle's top
+    EXPECT_NEAR(std::hypot(p[1] - p0[1], p[2] - (p0[2] - kRadius)), kRadius, 1e-9);
+  }
+  EXPECT_LE(path.trail_points().size(), static_cast<std::size_t>(kMaxPathSegments) + 1);
+
+  // at each row: the dots, the trail so far and the marker at the row's target
+  long last_capsules = -1;
+  for (const std::size_t row : {std::size_t{0}, log.rows() / 3, log.rows() - 1}) {
+    SCOPED_TRACE("row " + std::to_string(row));
+    const int before = arm();
+    path.add(scn, row, true, kToolPath);
+    ASSERT_LE(scn.ngeom - before, path.max_geoms());
+    long spheres = 0, capsules = 0, markers = 0;
+    for (int i = before; i < scn.ngeom; ++i) {
+      const mjvGeom& g = scn.geoms[i];
+      EXPECT_EQ(g.category, mjCAT_DECOR);
+      EXPECT_NE(g.objtype, mjOBJ_GEOM);  // never taken for the robot's geoms
+      if (g.type == mjGEOM_SPHERE && same_rgb(g.rgba, kTargetPath)) {
+        ++spheres;
+        if (std::fabs(g.size[0] - path.marker_radius()) < 1e-6) {
+          ++markers;
+          const double* target = log.frame_ref.data() + 3 * row;
+          for (int k = 0; k < 3; ++k) EXPECT_NEAR(g.pos[k], target[k], 1e-5);
+        }
+      } else if (g.type == mjGEOM_CAPSULE && same_rgb(g.rgba, kToolPath)) {
+        ++capsules;
+        EXPECT_NEAR(g.size[0], kTrail, 1e-6);
+      } else {
+        ADD_FAILURE() << "unexpected geom of type " << g.type;
+      }
+    }
+    EXPECT_EQ(markers, 1);
+    EXPECT_EQ(spheres, static_cast<long>(dots) + 1);
+    if (row == 0) {
+      EXPECT_EQ(capsules, 0);  // no trail yet
+    }
+    EXPECT_GT(capsules, last_capsules);    // the trail grows
+    last_capsules = capsules;
+  }
+  EXPECT_GE(last_capsules, 100);
+
+  // another run's trail alone, in its colour
+  const int before = arm();
+  path.add(scn, log.rows() - 1, false, kOrange);
+  for (int i = before; i < scn.ngeom; ++i) {
+    EXPECT_EQ(scn.geoms[i].type, mjGEOM_CAPSULE);
+    EXPECT_TRUE(same_rgb(scn.geoms[i].rgba, kOrange));
+  }
+  EXPECT_EQ(scn.ngeom - before, last_capsules);
+
+  // a full scene takes what fits
+  const int full = arm();
+  scn.maxgeom = full + 5;
+  path.add(scn, log.rows() - 1, true, kToolPath);
+  EXPECT_EQ(scn.ngeom, full + 5);
+}
+
+// the video of a run with a frame target shows its paths in their colours; the same run
+// without the frame columns renders as before, without them
+TEST_F(RenderTest, VideoOfAFrameTargetShowsItsPaths) {
+  mj::ModelPtr model = mj::load_model(kUr5e);
+  const RunLog log = ur5e_circle_log(model.get(), 0.5, 0.1, 1);
+  VideoOptions options = small_options();
+  options.width = 480;
+  options.height = 360;
+  options.overlay = false;
+  const std::string with = dir_.file("with.mp4");
+  const std::string without = dir_.file("without.mp4");
+  render_video(kUr5e, {log}, options, with);
+  render_video(kUr5e, {without_frame(log)}, options, without);
+  const std::vector<unsigned char> a = decode_frame(with, 12);
+  const std::vector<unsigned char> b = decode_frame(without, 12);
+  ASSERT_EQ(a.size(), static_cast<std::size_t>(480 * 360 * 3));
+  ASSERT_EQ(a.size(), b.size());
+  const double magenta = to_hsv(kTargetPath[0], kTargetPath[1], kTargetPath[2]).h;
+  const double green = to_hsv(kToolPath[0], kToolPath[1], kToolPath[2]).h;
+  EXPECT_GE(count_hue(a, magenta), 60) << "no target path";
+  EXPECT_GE(count_hue(a, green), 30) << "no tool path";
+  EXPECT_LE(count_hue(b, magenta), 5) << "a target path without frame columns";
+  EXPECT_LE(count_hue(b, green), 5) << "a tool path without frame columns";
 }
 
 // ------------------------------------------------------------------------------- overlay

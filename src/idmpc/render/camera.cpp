@@ -208,6 +208,7 @@ Motion measure_motion(const mjModel* m, const std::vector<mjData*>& datas,
       }
     }
   }
+  for (const Replay& r : replays) extend_by_frame_path(motion.visible, *r.log);
   // nothing visible: the model's own extent
   if (motion.visible.empty()) {
     const double e = m->stat.extent;
@@ -219,7 +220,7 @@ Motion measure_motion(const mjModel* m, const std::vector<mjData*>& datas,
 ScreenMask robot_footprint(const mjModel* m, const std::vector<mjData*>& datas,
                            const std::vector<Replay>& replays, const Schedule& schedule,
                            const mjvOption& opt, mjvCamera& cam, mjvScene& scn, int width,
-                           int height) {
+                           int height, const std::vector<FramePath>& paths) {
   // cells finer than the margin the free camera keeps around the overlays
   const int cell = std::clamp(height / kMaskRows, 1, kMaxMaskCell);
   ScreenMask mask((width + cell - 1) / cell, (height + cell - 1) / cell);
@@ -236,6 +237,22 @@ ScreenMask robot_footprint(const mjModel* m, const std::vector<mjData*>& datas,
         if (!mark_geom(mask, view, scn.geoms[i])) {
           mask.mark_all();
           return mask;
+        }
+      }
+      // the paths, as this frame's camera sees them
+      if (r > 0) continue;
+      for (const FramePath& path : paths) {
+        for (const std::vector<Vec3>* points : {&path.target_dots(), &path.trail_points()}) {
+          for (const Vec3& p : *points) {
+            mjvGeom marker;
+            const mjtNum size[3] = {path.marker_radius(), path.marker_radius(), path.marker_radius()};
+            const mjtNum pos[3] = {p[0], p[1], p[2]};
+            mjv_initGeom(&marker, mjGEOM_SPHERE, size, pos, nullptr, nullptr);
+            if (!mark_geom(mask, view, marker)) {
+              mask.mark_all();
+              return mask;
+            }
+          }
         }
       }
     }

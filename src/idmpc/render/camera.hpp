@@ -8,6 +8,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "idmpc/render/frame_path.hpp"
 #include "idmpc/render/framing.hpp"
 #include "idmpc/render/replay.hpp"
 
@@ -30,11 +31,12 @@ int find_fixed_camera(const mjModel* m, const CameraSpec& spec, const std::strin
 
 /// @brief Where the runs go over the whole video.
 struct Motion {
-  Bounds visible;  ///< every visible geom (moving and static) over all frames
+  Bounds visible;  ///< every visible geom (moving and static) over all frames, and the frame paths
   Bounds bodies;   ///< origins of the moving bodies: tells a planar motion
 };
 
-/// @brief Replays every frame of the schedule (one mjData per run) and bounds the motion.
+/// @brief Replays every frame of the schedule (one mjData per run) and bounds the motion, with
+/// every position and target of the runs' frame paths (logs with frame columns).
 Motion measure_motion(const mjModel* m, const std::vector<mjData*>& datas,
                       const std::vector<Replay>& replays, const Schedule& schedule,
                       const mjvOption& opt);
@@ -43,11 +45,12 @@ Motion measure_motion(const mjModel* m, const std::vector<mjData*>& datas,
 /// projects them with `cam` (fixed, free or tracking) on a width x height viewport: per frame
 /// and run, the screen box of each geom in pieces about as long as it is thick (a diagonal link
 /// marks a band, not its whole bounding square), on a grid of cells of at most 8 pixels. A geom
-/// reaching behind the camera marks the whole image. `scn` is scratch.
+/// reaching behind the camera marks the whole image. The frame paths' dots and trail vertices
+/// are marked too, each as large as the current target's marker. `scn` is scratch.
 ScreenMask robot_footprint(const mjModel* m, const std::vector<mjData*>& datas,
                            const std::vector<Replay>& replays, const Schedule& schedule,
                            const mjvOption& opt, mjvCamera& cam, mjvScene& scn, int width,
-                           int height);
+                           int height, const std::vector<FramePath>& paths = {});
 
 /// @brief Where the motion may go: the frame minus a margin, beside or above/below each
 /// overlay (normalized device coordinates); one candidate region per combination.

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "idmpc/render/frame_path.hpp"
+
 namespace idmpc::render {
 namespace {
 
@@ -38,7 +40,16 @@ std::string status(const Replay& r, double t) {
   return "";
 }
 
-// single run: key / value rows
+// a colour swatch and its name (compare mode's legend)
+Row legend_row(const std::string& name, const Rgb& rgb) {
+  Row row;
+  row.swatch = true;
+  row.swatch_rgb = rgb;
+  row.cells = {{name, rgb}};
+  return row;
+}
+
+// single run: key / value rows, then the paths' legend
 std::vector<Row> single_rows(const Replay& r, double t, double speed) {
   const std::size_t row = r.log->nearest_row(t);
   std::vector<Row> rows;
@@ -47,12 +58,18 @@ std::vector<Row> single_rows(const Replay& r, double t, double speed) {
   rows.push_back({{{"|u|", kKey}, {value_text("%.3f N m", r.log->u_norm(row))}}});
   rows.push_back({{{"residual", kKey}, {value_text("%.3e", r.log->residual[row])}}});
   rows.push_back({{{"update", kKey}, {value_text("%.3f ms", r.log->update_ms[row])}}});
+  if (has_frame_path(*r.log)) {
+    rows.push_back({{{"error", kKey}, {value_text("%.1f mm", 1e3 * frame_error(*r.log, row))}}});
+  }
   const std::string why = status(r, t);
   if (!why.empty()) rows.push_back({{{"status", kKey}, {why, kAlert}}});
+  // the paths' legend: their names in their colours
+  if (has_frame_path(*r.log)) rows.push_back({{{"target path", kTargetPath}, {"tool path", kToolPath}}});
   return rows;
 }
 
-// compare: the time, then per run a legend line and a line of values
+// compare: the time, then per run a legend line and a line of values (with the frame's error
+// for a run with a frame path), then the target path's legend
 std::vector<Row> compare_rows(const std::vector<Replay>& replays, const std::vector<Rgb>& colours,
                               double t, double speed) {
   std::vector<Row> rows;
@@ -69,9 +86,16 @@ std::vector<Row> compare_rows(const std::vector<Replay>& replays, const std::vec
     values.cells = {{"|u| " + value_text("%.3f", r.log->u_norm(row)), kWhite},
                     {"res " + value_text("%.2e", r.log->residual[row]), kWhite},
                     {value_text("%.3f", r.log->update_ms[row]) + " ms", kWhite}};
+    if (has_frame_path(*r.log)) {
+      values.cells.push_back({"err " + value_text("%.1f", 1e3 * frame_error(*r.log, row)) + " mm", kWhite});
+    }
     const std::string why = status(r, t);
     if (!why.empty()) values.cells.push_back({why, kAlert});
     rows.push_back(values);
+  }
+  // the trails have their runs' colours
+  if (std::any_of(replays.begin(), replays.end(), [](const Replay& r) { return has_frame_path(*r.log); })) {
+    rows.push_back(legend_row("target path", kTargetPath));
   }
   return rows;
 }

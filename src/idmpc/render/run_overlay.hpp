@@ -1,7 +1,8 @@
 #pragma once
 /// @file run_overlay.hpp
 /// @brief The overlays over a video of runs: a table of the time and each run's label, |u|,
-/// residual, update time and status, and a plot of |u| over time.
+/// residual, update time, the frame's position error (runs with a frame target) and status,
+/// with a legend of the frame paths' colours, and a plot of |u| over time.
 
 #include <array>
 #include <string>

@@ -10,6 +10,7 @@
 
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/render/camera.hpp"
+#include "idmpc/render/frame_path.hpp"
 #include "idmpc/render/gl_context.hpp"
 #include "idmpc/render/replay.hpp"
 #include "idmpc/render/run_overlay.hpp"
@@ -156,6 +157,17 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   mjv_defaultOption(&opt);
   const Motion motion = measure_motion(m, datas, replays, schedule, opt);
 
+  // the runs' frame paths (none for logs without frame columns), a few pixels thick
+  std::vector<FramePath> paths;
+  int path_geoms = 0;
+  for (const Replay& r : replays) {
+    paths.emplace_back(*r.log, trail_radius(motion.visible));
+    path_geoms += paths.back().max_geoms();
+  }
+  // the first run with a frame path shows the target's path and the current target
+  const auto target_path = static_cast<std::size_t>(
+      std::find_if(paths.begin(), paths.end(), [](const FramePath& p) { return !p.empty(); }) - paths.begin());
+
   // GL: OSMesa context and MuJoCo's off-screen buffer at the video size
   GlContext gl(options.width, options.height);
   m->vis.global.offwidth = options.width;
@@ -168,8 +180,8 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   }
   const mjrRect viewport{0, 0, options.width, options.height};
 
-  // the abstract scene: every run's geoms and the dressing
-  Scene scene(m, static_cast<int>(replays.size()) * m->ngeom + 1200);
+  // the abstract scene: every run's geoms, the paths and the dressing
+  Scene scene(m, static_cast<int>(replays.size()) * m->ngeom + path_geoms + 1200);
   mjvScene& scn = scene.scn;
 
   // overlays, the camera framing the motion beside them, then the overlays moved off the
@@ -182,7 +194,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   camera_axes(free_cam.azimuth, free_cam.elevation, view_forward, view_up, view_right);
   if (options.overlay) {
     overlay.avoid(robot_footprint(m, datas, replays, schedule, opt, cam, scn, options.width,
-                                  options.height));
+                                  options.height, paths));
   }
 
   // scene dressing where the model has none
@@ -212,6 +224,10 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
       keep_moving_geoms(scn, m, first);
       recolour(scn, m, first, colours[1]);
       make_cores(scn, m, first, eye);
+    }
+    // the frame paths: the target's, then each run's trail (in its colour when comparing)
+    for (std::size_t r = 0; r < replays.size(); ++r) {
+      paths[r].add(scn, replays[r].pose_row(t), r == target_path, compare ? colours[r] : kToolPath);
     }
     if (dress_floor) add_floor(scn, motion.visible);
     if (dress_light) add_key_light(scn, motion.visible, view_forward);

@@ -45,7 +45,11 @@ long video_frame_count(double log_seconds, const VideoOptions& options);
 /// blue and the other as a thinner solid orange core drawn just in front of it, so identical
 /// motion shows one blue arm with an orange stripe and any difference shows two arms; the
 /// overlay becomes a colour legend with both runs' values and the plot shows both |u| curves.
-/// The free camera frames the whole motion beside the overlays. Frames sample the logs at `fps`
+/// A run whose log has a frame target (columns x..z_ref) also shows the target's path over the
+/// whole run as magenta dots, the frame's travelled path up to the current time as a green trail
+/// (its run's colour in compare mode) and the current target as a larger magenta sphere; the
+/// overlay adds the frame's position error in mm and a legend of the paths.
+/// The free camera frames the whole motion and the paths beside the overlays. Frames sample the logs at `fps`
 /// and real time x `speed` (each frame shows the log row nearest its time); a run that ends
 /// early (or diverges to non-finite values) holds its last finite pose.
 ///
