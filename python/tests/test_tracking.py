@@ -93,7 +93,7 @@ def test_tip_at_q0_is_the_targets_start(circle_run):
     target = run.frame_target
     assert isinstance(target, idmpc.FrameTarget) and target.frame.name == "site 'tip'"
     np.testing.assert_array_equal(target.position_weight, [1e4] * 3)
-    assert target.orientation_weight == 10
+    assert target.orientation_weight == 100
     p, R, _ = idmpc.frame_kinematics(run.model, run.frame("tip"), run.q0)
     np.testing.assert_allclose(target.position, p, rtol=0, atol=1e-12)
     np.testing.assert_allclose(target.rotation, R, rtol=0, atol=1e-12)
@@ -250,7 +250,7 @@ def test_circle_task_fields():
     target = task.target
     assert isinstance(target, idmpc.FrameTask)
     assert (target.frame, target.position, target.orientation) == ("tip", [], [])
-    assert target.position_weight == [1e4] and target.orientation_weight == 10
+    assert target.position_weight == [1e4] and target.orientation_weight == 100
     assert task.reference == file["reference"]
     assert task.tracking_tolerance == 5e-3
     # fields are copies: assign a whole value
