@@ -14,6 +14,8 @@ namespace {
 
 // the "auto" weights (horizon_setup.hpp)
 constexpr double kAutoQq = 100, kAutoQv = 10, kAutoTorqueCost = 10;
+// with a frame target the joint terms only hold the posture and damp: a hundredth and a tenth
+constexpr double kAutoPostureQq = 1, kAutoPostureQv = 1;
 // without a declared limit: the holding torque twice over plus this acceleration of the
 // joint's own inertia [rad/s²]
 constexpr double kAutoAcceleration = 20;
@@ -59,12 +61,13 @@ VecX<double> inverse_inertia_diagonal(const Model& model, const std::vector<VecX
 // than the horizon step resolves. For joint j alone (effective inertia m_j = 1/(M⁻¹)_jj at its
 // lightest over q0 and q_ref) the LQR of ½Q_q e² + ½R u² has stiffness √(Q_q/R) and frequency
 // ω = (Q_q/R)^¼/√m_j; ω·Δτ ≤ 0.35 needs R ≥ Q_q/(m_j² ω_max⁴), ω_max = 0.35/Δτ.
-OcpWeights auto_weights(const ResolvedTask& r, const Model& model, const Model& stepped, double dtau,
-                        const VecX<double>& lower, const VecX<double>& upper, std::vector<std::string>& notes) {
+OcpWeights auto_weights(const ResolvedTask& r, bool frame_target, const Model& model, const Model& stepped,
+                        double dtau, const VecX<double>& lower, const VecX<double>& upper,
+                        std::vector<std::string>& notes) {
   OcpWeights w = r.weights;
   const int n = model.n;
-  if (w.Qq.size() == 0) w.Qq = VecX<double>::Constant(n, kAutoQq);
-  if (w.Qv.size() == 0) w.Qv = VecX<double>::Constant(n, kAutoQv);
+  if (w.Qq.size() == 0) w.Qq = VecX<double>::Constant(n, frame_target ? kAutoPostureQq : kAutoQq);
+  if (w.Qv.size() == 0) w.Qv = VecX<double>::Constant(n, frame_target ? kAutoPostureQv : kAutoQv);
   if (w.R.size() == 0) {
     Data data(model);
     const VecX<double> zero = VecX<double>::Zero(n);
@@ -147,7 +150,7 @@ HorizonSetup setup_horizon(const Task& task, const ResolvedTask& r, const Model&
   const Model with_friction = with_joint_friction(model, friction_loss.cwiseMax(0.0), eps);
   Model horizon_model = with_implicit_damping(with_friction, implicit_step);
   Model plant_model = with_implicit_damping(with_friction, plant_step);
-  OcpWeights weights = auto_weights(r, with_friction, stepped, dtau, lower, upper, notes);
+  OcpWeights weights = auto_weights(r, task.target.has_value(), with_friction, stepped, dtau, lower, upper, notes);
   return HorizonSetup{std::move(plant_model), std::move(horizon_model), std::move(weights), implicit, ratio,
                       std::move(eps), std::move(notes)};
 }
