@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "idmpc/mujoco/task_run.hpp"
 #include "support/problems.hpp"
 
@@ -147,6 +149,73 @@ TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("qref"), std::string::npos) << e.what();
   }
+}
+
+
+// a task from JSON text, as if read from `name` in the shipped mjcf/ directory
+Task task_in_mjcf(const std::string& json, const std::string& name = "t.json") {
+  Task t = task_from_json(nlohmann::json::parse(json), "task file '" + name + "'", arm_defaults());
+  t.source = std::string(IDMPC_SOURCE_DIR "/mjcf/") + name;
+  t.model = std::string(IDMPC_SOURCE_DIR "/mjcf/") + t.model;
+  return t;
+}
+
+std::string error_of(const std::string& json) {
+  try {
+    const mj::TaskRun run(task_in_mjcf(json));
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+// a bad frame target or reference is one line naming the task file and the field
+TEST(TaskRun, FrameTargetAndReferenceErrorsNameTheField) {
+  const std::string where = std::string("task file '" IDMPC_SOURCE_DIR "/mjcf/t.json'");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "nope"}})"),
+            "model '" IDMPC_SOURCE_DIR "/mjcf/ur5e.xml' has no site or body 'nope' (sites: tip)");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip", "orientation": [1, 1, 0, 0]}})"),
+            where + ", 'target': orientation [w, x, y, z] must be a unit quaternion, its norm is 1.414214");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip", "weights": {"orientation": -1}}})"),
+            where + ", 'target': weights must be finite and non-negative");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip"}, "reference": {"shape": "circle"}})"),
+            where + ", 'reference': missing field 'radius' (a positive number [m])");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "reference": {"shape": "line", "to": [1, 2], "duration": 1}})"),
+            where + ", 'reference': field 'to': expected a list of 6 numbers (the reference's dim), got [1,2]");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip"}, "tracking_tolerance": -1})"),
+            "tracking_tolerance must be positive and finite [m], got -1");
+}
+
+// Without a frame target a reference moves the joint target: from home to a pose in 1 s
+// (minimum jerk), the arm following it and at rest on its end; the horizon's stages see the
+// reference at their own times
+TEST(TaskRun, AJointReferenceMovesTheJointTarget) {
+  Task task = task_in_mjcf(R"({"model": "ur5e.xml", "q0": "home", "qref": "q0", "duration": 2,
+      "reference": {"shape": "line", "to": [-1.3, -1.4, 1.4, -1.6, -1.571, 0.2], "duration": 1}})");
+  mj::TaskRun run(task);
+  ASSERT_TRUE(run.reference() && !run.frame_target());
+  ASSERT_EQ(run.reference()->dim(), 6);
+  VecX<double> end(6), rate(6);
+  run.reference()->sample(10.0, end, rate);
+  const mj::RunResult res = run.run();
+  ASSERT_FALSE(res.diverged) << res.divergence_reason;
+  // the final error is against the reference at the end, here its end value
+  EXPECT_NEAR(res.final_q_error, (res.final_q - end).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LT(res.final_q_error, 5e-3);
+  EXPECT_TRUE(run.summary(res).reached);
+  // at t = 0.5 the stages see the reference at 0.5 + i·Δτ, with its rate as the velocity target
+  OcpProblem& problem = run.controller().nlp().problem();
+  run.controller().nlp().set_time(0.5);
+  VecX<double> U = VecX<double>::Zero(run.controller().nlp().dim()), F(U.size());
+  run.controller().nlp().residual(U, res.final_q, VecX<double>::Zero(6), 0.5, F);
+  const double dtau = 0.5 / problem.N();
+  for (int i : {0, 7, problem.N()}) {
+    VecX<double> q_ref(6), v_ref(6);
+    run.reference()->sample(0.5 + i * dtau, q_ref, v_ref);
+    EXPECT_LT((problem.terms().q_ref(i) - q_ref).cwiseAbs().maxCoeff(), 1e-15) << "stage " << i;
+    EXPECT_LT((problem.terms().v_ref(i) - v_ref).cwiseAbs().maxCoeff(), 1e-15) << "stage " << i;
+  }
+  EXPECT_GT(problem.terms().v_ref(0).norm(), 0.5) << "mid-move, the reference moves";
 }
 
 }  // namespace

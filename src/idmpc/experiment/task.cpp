@@ -408,6 +408,9 @@ ResolvedTask resolve(const Task& t, int n) {
     throw std::invalid_argument("--observer-time-constant (observer_time_constant) must be positive with offset-free "
                                 "tracking, got " + text(t.observer_time_constant));
   }
+  if (!(t.tracking_tolerance > 0) || !std::isfinite(t.tracking_tolerance)) {
+    throw std::invalid_argument("tracking_tolerance must be positive and finite [m], got " + text(t.tracking_tolerance));
+  }
   if (!(t.reach_tolerance >= 0) || !std::isfinite(t.reach_tolerance)) {
     throw std::invalid_argument("--reach-tolerance (reach_tolerance) must be non-negative and finite, got " +
                                 text(t.reach_tolerance));

@@ -100,7 +100,7 @@ TaskRun::TaskRun(const Task& task)
 
 void TaskRun::set_up_references() {
   const Task& task = task_;
-  const std::string where = "task '" + (task.source.empty() ? std::string("(given)") : task.source) + "'";
+  const std::string where = "task file '" + (task.source.empty() ? std::string("(given)") : task.source) + "'";
   const std::string base_dir = std::filesystem::path(task.source).parent_path().string();
   VecX<double> start = resolved_.qref;
   if (task.target) {
@@ -108,7 +108,7 @@ void TaskRun::set_up_references() {
     const mjModel* m = loaded_.model.get();
     FrameTarget target;
     target.frame = import_frame(m, f.frame, task.model);
-    const std::string field = where + " field 'target'";
+    const std::string field = where + ", 'target'";
     if (f.position_weight.size() == 1) {
       target.position_weight.setConstant(f.position_weight[0]);
     } else {
@@ -143,7 +143,7 @@ void TaskRun::set_up_references() {
     if (tracking_.site < 0) tracking_.body = mj_name2id(m, mjOBJ_BODY, f.frame.c_str());
   }
   if (!task.reference.is_null()) {
-    reference_ = trajectory_from_json(task.reference, where + " field 'reference'", start, base_dir);
+    reference_ = trajectory_from_json(task.reference, where + ", 'reference'", start, base_dir);
     (task.target ? tracking_.position : tracking_.joints) = reference_;
   }
 }
