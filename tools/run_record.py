@@ -1,7 +1,8 @@
 """The run record and the paper's tables as the Python tools read them (schema:
 docs/run_record.md); idmpc writes both from src/idmpc/experiment/.
 
-- read_log(path, label): the per-step CSV log, columns t, q0.., v0.., u0.., residual, update_ms
+- read_log(path, label): the per-step CSV log, columns t, q0.., v0.., u0.., [uc0..,] residual,
+  update_ms[, x, y, z, x_ref, y_ref, z_ref]
 - read_summary(path): the JSON summary, checked for the schema version this module reads
 - load_paper_tables(): the paper's Tables 1-3 from mjcf/paper_tables.json
 """
@@ -31,12 +32,17 @@ class Log:
         self.u = []
         self.residual = []
         self.update_ms = []
+        self.frame = []      # with a frame target: [x, y, z] per row, and its target
+        self.frame_ref = []
 
 
-def expected_header(n, commanded):
+FRAME_COLUMNS = ["x", "y", "z", "x_ref", "y_ref", "z_ref"]
+
+
+def expected_header(n, commanded, frame=False):
     return (["t"] + [f"q{j}" for j in range(n)] + [f"v{j}" for j in range(n)]
             + [f"u{j}" for j in range(n)] + ([f"uc{j}" for j in range(n)] if commanded else [])
-            + ["residual", "update_ms"])
+            + ["residual", "update_ms"] + (FRAME_COLUMNS if frame else []))
 
 
 def read_log(path, label):
@@ -51,11 +57,13 @@ def read_log(path, label):
     header = [name.strip() for name in rows[0]]
     ncols = len(header)
     commanded = "uc0" in header
-    n = (ncols - 3) // (4 if commanded else 3)
-    if n < 1 or header != expected_header(n, commanded):
+    frame = header[-len(FRAME_COLUMNS):] == FRAME_COLUMNS
+    n = (ncols - 3 - (len(FRAME_COLUMNS) if frame else 0)) // (4 if commanded else 3)
+    if n < 1 or header != expected_header(n, commanded, frame):
         shown = ",".join(header[:8]) + (",..." if ncols > 8 else "")
         raise LogError(f"log '{path}' has a malformed header: expected "
-                       "t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,update_ms with n >= 1, "
+                       "t,q0..q{n-1},v0..v{n-1},u0..u{n-1}[,uc0..uc{n-1}],residual,update_ms"
+                       "[,x,y,z,x_ref,y_ref,z_ref] with n >= 1, "
                        f"got '{shown}' ({ncols} columns)")
     log = Log(path, label)
     log.n = n
@@ -77,8 +85,12 @@ def read_log(path, label):
             log.q[j].append(values[1 + j])
             log.v[j].append(values[1 + n + j])
             log.u[j].append(values[1 + 2 * n + j])
-        log.residual.append(values[-2])
-        log.update_ms.append(values[-1])
+        end = len(values) - (len(FRAME_COLUMNS) if frame else 0)
+        log.residual.append(values[end - 2])
+        log.update_ms.append(values[end - 1])
+        if frame:
+            log.frame.append(values[end:end + 3])
+            log.frame_ref.append(values[end + 3:end + 6])
     if not log.t:
         raise LogError(f"log '{path}' has a header but no data rows")
     return log
