@@ -2,14 +2,9 @@
 // with a tolerance from the error analysis), values and rates are continuous where the pieces
 // meet, each kind has the shape it promises (a circle of radius r in its plane, waypoints hit at
 // rest, samples interpolated C¹, ends held at rest), and sampling allocates nothing.
-//
-// The library is compiled without Eigen's runtime allocation check, so the allocation test counts
-// calls to malloc itself: the executable defines malloc, calloc and realloc over glibc's own entry
-// points, which takes precedence over libc's. Under AddressSanitizer, whose runtime owns malloc, it
-// counts through the runtime's allocation hook instead.
+// Allocations are counted by support/count_allocations.hpp.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <functional>
@@ -19,61 +14,13 @@
 #include <vector>
 
 #include "idmpc/ocp/trajectory.hpp"
-#include "support/sanitizers.hpp"
+#include "support/count_allocations.hpp"
 
-namespace {
-std::atomic<long> g_allocations{0};
-std::atomic<bool> g_counting{false};
-void count() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-#if IDMPC_TEST_ASAN
-// the sanitizer runtime's hook (sanitizer/allocator_interface.h, which gcc does not install)
-extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*)(const volatile void*, std::size_t),
-                                                         void (*)(const volatile void*));
-namespace {
-void malloc_hook(const volatile void*, std::size_t) { count(); }
-void free_hook(const volatile void*) {}
-// installed before main, so before any test runs
-[[maybe_unused]] const int g_hooks_installed = __sanitizer_install_malloc_and_free_hooks(malloc_hook, free_hook);
-}  // namespace
-#else
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* malloc(std::size_t size) {
-  count();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t n, std::size_t size) {
-  count();
-  return __libc_calloc(n, size);
-}
-void* realloc(void* p, std::size_t size) {
-  count();
-  return __libc_realloc(p, size);
-}
-}
-#endif
 
 namespace idmpc {
 namespace {
 
-// allocations counted over the guard's lifetime
-class CountAllocations {
- public:
-  CountAllocations() {
-    g_allocations = 0;
-    g_counting = true;
-  }
-  ~CountAllocations() { g_counting = false; }
-  CountAllocations(const CountAllocations&) = delete;
-  CountAllocations& operator=(const CountAllocations&) = delete;
-  long count() const { return g_allocations.load(); }
-};
+using test::CountAllocations;
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kEps = std::numeric_limits<double>::epsilon();

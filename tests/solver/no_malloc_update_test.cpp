@@ -1,13 +1,8 @@
 // A C/GMRES update allocates no heap memory once the controller exists: every variant (FD/ID ×
 // matrix/adjoint × single/multiple shooting, with and without torque limits) is a hot path.
-//
-// The solver is compiled without Eigen's runtime allocation check, so this test counts calls to
-// malloc itself: the executable defines malloc, calloc and realloc over glibc's own entry points,
-// which takes precedence over libc's. Under AddressSanitizer, whose runtime owns malloc, it counts
-// through the runtime's allocation hook instead.
+// Allocations are counted by support/count_allocations.hpp.
 #include <gtest/gtest.h>
 
-#include <atomic>
 #include <cstddef>
 #include <limits>
 #include <memory>
@@ -15,49 +10,13 @@
 #include <tuple>
 
 #include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/ocp/trajectory.hpp"
 #include "idmpc/solver/cgmres.hpp"
 #include "idmpc/solver/controller.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
-#include "support/sanitizers.hpp"
+#include "support/count_allocations.hpp"
 
-namespace {
-std::atomic<long> g_allocations{0};
-std::atomic<bool> g_counting{false};
-void count() {
-  if (g_counting.load(std::memory_order_relaxed)) g_allocations.fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-#if IDMPC_TEST_ASAN
-// the sanitizer runtime's hook (sanitizer/allocator_interface.h, which gcc does not install)
-extern "C" int __sanitizer_install_malloc_and_free_hooks(void (*)(const volatile void*, std::size_t),
-                                                         void (*)(const volatile void*));
-namespace {
-void malloc_hook(const volatile void*, std::size_t) { count(); }
-void free_hook(const volatile void*) {}
-// installed before main, so before any test runs
-[[maybe_unused]] const int g_hooks_installed = __sanitizer_install_malloc_and_free_hooks(malloc_hook, free_hook);
-}  // namespace
-#else
-extern "C" {
-void* __libc_malloc(std::size_t);
-void* __libc_calloc(std::size_t, std::size_t);
-void* __libc_realloc(void*, std::size_t);
-void* malloc(std::size_t size) {
-  count();
-  return __libc_malloc(size);
-}
-void* calloc(std::size_t n, std::size_t size) {
-  count();
-  return __libc_calloc(n, size);
-}
-void* realloc(void* p, std::size_t size) {
-  count();
-  return __libc_realloc(p, size);
-}
-}
-#endif
 
 namespace idmpc {
 namespace {
@@ -66,16 +25,7 @@ using test::load_problem;
 using test::paper_weights;
 using test::Problem;
 
-// allocations counted over the guard's lifetime
-class CountAllocations {
- public:
-  CountAllocations() {
-    g_allocations = 0;
-    g_counting = true;
-  }
-  ~CountAllocations() { g_counting = false; }
-  long count() const { return g_allocations.load(); }
-};
+using test::CountAllocations;
 
 TEST(NoMallocCounter, IsArmed) {
   long n = 0;
@@ -134,6 +84,26 @@ TEST_P(NoMallocUpdate, SetTargetThenUpdateDoesNotAllocate) {
   const VecX<double> target = (VecX<double>(4) << 0.1, -0.2, 0.15, 0.05).finished();
   EXPECT_EQ(allocations_of_updates([&] { ocp_->problem().set_target(target); }), 0);
   EXPECT_EQ(ocp_->problem().cost().q_ref(), target);
+}
+
+// a frame target with a moving position and a moving joint target: the stages' references are
+// sampled in place at each new time (and the ID torque references recomputed), the frame's
+// kinematics and Jᵀf run in preallocated workspaces
+TEST_P(NoMallocUpdate, WithAFrameTargetAndMovingReferencesUpdatesDoNotAllocate) {
+  FrameTarget target;
+  target.frame = Frame{"link3 tip", 3, Transform<double>{}};
+  target.frame.placement.r = Vec3<double>(0, 0, 0.5);
+  target.position_weight.setConstant(100);
+  target.orientation_weight = 10;
+  ocp_->problem().set_frame_target(target);
+  ocp_->problem().set_frame_trajectory(std::make_shared<const CircleTrajectory>(
+      Vec3<double>(0.5, 0, 5), Vec3<double>::UnitY(), 0.1, 0.5, Vec3<double>::UnitZ(), 0.2));
+  MatX<double> waypoints(4, 2);
+  waypoints << q_, VecX<double>::Zero(4);
+  ocp_->problem().set_joint_trajectory(
+      std::make_shared<const WaypointTrajectory>(std::vector<double>{0.5, 1.5}, waypoints));
+  ASSERT_TRUE(solver_->update(0.5, q_, v_)) << solver_->failure();
+  EXPECT_EQ(allocations_of_updates([] {}), 0);
 }
 
 // the controller's own work per update (eqs. 27–28, the disturbance observer handing d̂ to the
