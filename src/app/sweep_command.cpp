@@ -434,31 +434,50 @@ std::vector<std::string> variants(const std::vector<Cell>& cells) {
   return out;
 }
 
-// the real-arm tables: time per update with ID/FD, then each run's outcome
-std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
-                          const std::map<std::string, CellResult>& done) {
-  auto find = [&](const Cell& c) -> const CellResult* {
+// the rows of a task-list table (arms, tracking): each task with each offset-free setting it runs
+// with, in the grid's order, and the finished cells of a row
+struct TaskRows {
+  using Row = std::pair<std::string, bool>;
+  const std::vector<Cell>& cells;
+  const std::map<std::string, CellResult>& done;
+  std::vector<Row> rows;
+  std::vector<std::string> modes;  // the solver variants, in the grid's order
+
+  TaskRows(const std::vector<Cell>& c, const std::map<std::string, CellResult>& d) : cells(c), done(d) {
+    modes = variants(cells);
+    for (const Cell& cell : cells) {
+      if (std::find(rows.begin(), rows.end(), Row{cell.model, cell.offset_free}) == rows.end()) {
+        rows.emplace_back(cell.model, cell.offset_free);
+      }
+    }
+  }
+  const CellResult* find(const Cell& c) const {
     const auto it = done.find(c.key());
     return it == done.end() ? nullptr : &it->second;
-  };
-  const std::vector<std::string> modes = variants(cells);
-  // the rows: each task with each offset-free setting it runs with, in the grid's order
-  using Row = std::pair<std::string, bool>;
-  std::vector<Row> rows;
-  std::set<double> tolerances;  // of the finished cells
-  for (const Cell& c : cells) {
-    if (std::find(rows.begin(), rows.end(), Row{c.model, c.offset_free}) == rows.end()) {
-      rows.emplace_back(c.model, c.offset_free);
-    }
-    if (const CellResult* r = find(c)) tolerances.insert(r->reach_tolerance);
   }
-  auto cell_of = [&](const Row& row, const std::string& f, const std::string& mode) -> const CellResult* {
+  const CellResult* cell_of(const Row& row, const std::string& f, const std::string& mode) const {
     for (const Cell& c : cells) {
       if (c.model == row.first && c.offset_free == row.second && c.formulation == f && c.variant() == mode) {
         return find(c);
       }
     }
     return nullptr;
+  }
+};
+
+// the real-arm tables: time per update with ID/FD, then each run's outcome
+std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
+                          const std::map<std::string, CellResult>& done) {
+  const TaskRows table(cells, done);
+  const std::vector<std::string>& modes = table.modes;
+  const std::vector<TaskRows::Row>& rows = table.rows;
+  using Row = TaskRows::Row;
+  std::set<double> tolerances;  // of the finished cells
+  for (const Cell& c : cells) {
+    if (const CellResult* r = table.find(c)) tolerances.insert(r->reach_tolerance);
+  }
+  auto cell_of = [&](const Row& row, const std::string& f, const std::string& mode) {
+    return table.cell_of(row, f, mode);
   };
   auto ms = [](const CellResult* r) {
     return r ? fmt(r->mean_ms) + (r->diverged ? "*" : (r->reached ? "" : "°")) : std::string("–");
@@ -537,26 +556,7 @@ std::string arms_markdown(const SweepOptions& opt, const std::vector<Cell>& cell
 // and the frame's position error, RMS and max over the run, with the orientation error
 std::string tracking_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
                               const std::map<std::string, CellResult>& done) {
-  auto find = [&](const Cell& c) -> const CellResult* {
-    const auto it = done.find(c.key());
-    return it == done.end() ? nullptr : &it->second;
-  };
-  const std::vector<std::string> modes = variants(cells);
-  using Row = std::pair<std::string, bool>;
-  std::vector<Row> rows;
-  for (const Cell& c : cells) {
-    if (std::find(rows.begin(), rows.end(), Row{c.model, c.offset_free}) == rows.end()) {
-      rows.emplace_back(c.model, c.offset_free);
-    }
-  }
-  auto cell_of = [&](const Row& row, const std::string& f, const std::string& mode) -> const CellResult* {
-    for (const Cell& c : cells) {
-      if (c.model == row.first && c.offset_free == row.second && c.formulation == f && c.variant() == mode) {
-        return find(c);
-      }
-    }
-    return nullptr;
-  };
+  const TaskRows table(cells, done);
   auto mm = [](double m) { return fmt(1e3 * m, 3); };
   const bool shipped_list = opt.arms_tasks.empty() && opt.models_dir.empty();
   std::ostringstream o;
@@ -569,9 +569,9 @@ std::string tracking_markdown(const SweepOptions& opt, const std::vector<Cell>& 
        "[deg]. `*` diverged, `°` RMS position error not below the task's tracking_tolerance. "
     << stages_note(opt) << "\n\n| task | offset-free | variant | FD ms | ID ms | ID/FD | FD RMS / max [mm] | "
        "ID RMS / max [mm] | FD / ID orientation RMS [deg] |\n|---|---|---|---|---|---|---|---|---|\n";
-  for (const Row& row : rows) {
-    for (const auto& mode : modes) {
-      const CellResult *fd = cell_of(row, "fd", mode), *id = cell_of(row, "id", mode);
+  for (const TaskRows::Row& row : table.rows) {
+    for (const auto& mode : table.modes) {
+      const CellResult *fd = table.cell_of(row, "fd", mode), *id = table.cell_of(row, "id", mode);
       auto ms = [](const CellResult* r) {
         return r ? fmt(r->mean_ms) + (r->diverged ? "*" : (r->reached ? "" : "°")) : std::string("–");
       };
