@@ -16,6 +16,14 @@ const Model& checked(const std::shared_ptr<const Model>& model) {
 
 std::string frame_label(const Frame& frame) { return "frame target '" + frame.name + "'"; }
 
+// a target pose: a finite position and a rotation matrix
+void check_pose(const Frame& frame, const Vec3<double>& position, const Mat3<double>& rotation) {
+  if (!position.allFinite()) throw std::invalid_argument(frame_label(frame) + ": position is not finite");
+  if (!rotation.allFinite() || !(rotation.transpose() * rotation).isIdentity(1e-9) || rotation.determinant() < 0) {
+    throw std::invalid_argument(frame_label(frame) + ": rotation is not a rotation matrix");
+  }
+}
+
 }  // namespace
 
 StageTerms::StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits, int N,
@@ -101,20 +109,12 @@ void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
     return;
   }
   const FrameTarget& f = *target;
-  const std::string label = frame_label(f.frame);
-  if (f.frame.link < -1 || f.frame.link >= n()) {
-    throw std::invalid_argument(label + ": link " + std::to_string(f.frame.link) + " is not a link of the model (" +
-                                std::to_string(n()) + " links)");
-  }
+  check_frame(*model_, f.frame);  // its link and placement
   if (!f.position_weight.allFinite() || (f.position_weight.array() < 0).any() ||
       !std::isfinite(f.orientation_weight) || f.orientation_weight < 0) {
-    throw std::invalid_argument(label + ": weights must be finite and non-negative");
+    throw std::invalid_argument(frame_label(f.frame) + ": weights must be finite and non-negative");
   }
-  if (!f.position.allFinite()) throw std::invalid_argument(label + ": position is not finite");
-  if (!f.rotation.allFinite() || !(f.rotation.transpose() * f.rotation).isIdentity(1e-9) ||
-      f.rotation.determinant() < 0) {
-    throw std::invalid_argument(label + ": rotation is not a rotation matrix");
-  }
+  check_pose(f.frame, f.position, f.rotation);
   frame_ = target;
   kinematics_.emplace(*model_, frame_->frame);
   jacobian_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
@@ -136,10 +136,7 @@ void StageTerms::set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref) {
 
 void StageTerms::set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation) {
   if (!frame_) throw std::invalid_argument("set_frame_pose: the problem has no frame target");
-  if (!position.allFinite()) throw std::invalid_argument(frame_label(frame_->frame) + ": position is not finite");
-  if (!rotation.allFinite() || !(rotation.transpose() * rotation).isIdentity(1e-9) || rotation.determinant() < 0) {
-    throw std::invalid_argument(frame_label(frame_->frame) + ": rotation is not a rotation matrix");
-  }
+  check_pose(frame_->frame, position, rotation);
   frame_->position = position;
   frame_->rotation = rotation;
   if (!frame_trajectory_) update_frame_references();
