@@ -175,9 +175,9 @@ TEST(TaskRun, FrameTargetAndReferenceErrorsNameTheField) {
   EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "nope"}})"),
             "model '" IDMPC_SOURCE_DIR "/mjcf/ur5e.xml' has no site or body 'nope' (sites: tip)");
   EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip", "orientation": [1, 1, 0, 0]}})"),
-            where + ", 'target': orientation [w, x, y, z] must be a unit quaternion, its norm is 1.414214");
+            "target.orientation [w, x, y, z] must be a unit quaternion, its norm is 1.41421");
   EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip", "weights": {"orientation": -1}}})"),
-            where + ", 'target': weights must be finite and non-negative");
+            "target.weights (position, orientation) must be finite and non-negative, got -1.000000");
   EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip"}, "reference": {"shape": "circle"}})"),
             where + ", 'reference': missing field 'radius' (a positive number [m])");
   EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "reference": {"shape": "line", "to": [1, 2], "duration": 1}})"),

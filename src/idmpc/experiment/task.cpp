@@ -362,6 +362,21 @@ ResolvedTask resolve(const Task& t, int n) {
     r.warnings.push_back("--Qa (weights.Qa) has no effect with FD: the acceleration is not a decision variable there");
   }
   r.qref = finite(t.qref.empty() ? VecX<double>::Zero(n) : per_joint(t.qref, n, "--qref (qref)"), "--qref (qref)");
+  if (t.target) {
+    // the frame target's own values (its frame and "start" pose need the model: mj::TaskRun)
+    const FrameTask& f = *t.target;
+    std::vector<double> w = f.position_weight;
+    w.push_back(f.orientation_weight);
+    non_negative(Eigen::Map<const VecX<double>>(w.data(), static_cast<Eigen::Index>(w.size())),
+                 "target.weights (position, orientation)");
+    if (!f.orientation.empty()) {
+      const double norm = Eigen::Map<const Eigen::Vector4d>(f.orientation.data()).norm();
+      if (!(std::abs(norm - 1.0) < 1e-6)) {
+        throw std::invalid_argument("target.orientation [w, x, y, z] must be a unit quaternion, its norm is " +
+                                    text(norm));
+      }
+    }
+  }
   r.torque_limit = VecX<double>::Constant(n, std::numeric_limits<double>::infinity());
   if (!t.torque_limit.empty()) {
     r.torque_limit = per_joint(t.torque_limit, n, "--torque-limit (torque_limit)");

@@ -18,7 +18,7 @@ constexpr double kMaxSpeed = 1e4;
 class TrackingMeter {
  public:
   TrackingMeter(const mjModel* m, const TrackingSettings& s, int n)
-      : m_(m), s_(s), d_(s.frame() || s.joints ? make_data(m) : nullptr), q_ref_(n), rate_(n) {}
+      : m_(m), s_(s), d_(s.frame() ? make_data(m) : nullptr), q_ref_(n), rate_(n) {}
 
   // the frame's position and target at (t, q), accumulated; false without a frame
   bool measure(double t, const VecX<double>& q) {

@@ -108,33 +108,21 @@ void TaskRun::set_up_references() {
     const mjModel* m = loaded_.model.get();
     FrameTarget target;
     target.frame = import_frame(m, f.frame, task.model);
-    const std::string field = where + ", 'target'";
     if (f.position_weight.size() == 1) {
       target.position_weight.setConstant(f.position_weight[0]);
     } else {
       target.position_weight = Eigen::Map<const Vec3<double>>(f.position_weight.data());
     }
     target.orientation_weight = f.orientation_weight;
-    // "start": the frame's pose at q0
+    // "start": the frame's pose at q0 (resolve checked the values given)
     FrameKinematics<double> fk(*model_, target.frame);
     fk.compute(*model_, resolved_.q0);
     target.position = f.position.empty() ? fk.position() : Vec3<double>(Eigen::Map<const Vec3<double>>(f.position.data()));
-    if (f.orientation.empty()) {
-      target.rotation = fk.rotation();
-    } else {
-      const Eigen::Quaterniond quat(f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3]);
-      if (!(std::abs(quat.norm() - 1.0) < 1e-6)) {
-        throw std::invalid_argument(field + ": orientation [w, x, y, z] must be a unit quaternion, its norm is " +
-                                    std::to_string(quat.norm()));
-      }
-      target.rotation = quat.toRotationMatrix();
-    }
-    // checked by the problem as well, named here as the task field
-    if (!(target.position_weight.array() >= 0).all() || !target.position_weight.allFinite() ||
-        !(target.orientation_weight >= 0) || !std::isfinite(target.orientation_weight)) {
-      throw std::invalid_argument(field + ": weights must be finite and non-negative");
-    }
-    if (!target.position.allFinite()) throw std::invalid_argument(field + ": position must be finite");
+    target.rotation = f.orientation.empty()
+                          ? fk.rotation()
+                          : Eigen::Quaterniond(f.orientation[0], f.orientation[1], f.orientation[2], f.orientation[3])
+                                .normalized()
+                                .toRotationMatrix();
     frame_target_ = target;
     start = target.position;
     tracking_.rotation = target.rotation;
