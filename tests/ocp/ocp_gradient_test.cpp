@@ -423,7 +423,7 @@ TEST_P(OcpGradient, WithFrictionAndDisturbanceResidualIsTheGradientOfTheCost) {
         ocp.set_stage_batching(lanes);
         ocp.problem().set_disturbance(d_hat);
         ASSERT_EQ(ocp.problem().disturbance(), d_hat);
-        EXPECT_LE((ocp.problem().cost().u_ref() - u_ref).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, u_ref.norm()))
+        EXPECT_LE((ocp.problem().terms().u_ref(0) - u_ref).cwiseAbs().maxCoeff(), 1e-12 * std::max(1.0, u_ref.norm()))
             << "u_ref = ID(q_ref, 0, 0) - d_hat";
         const int m = ocp.problem().m(), sd = ocp.stage_dim();
         ASSERT_EQ(m, limited ? n / 2 : 0);
@@ -625,7 +625,7 @@ TEST(OcpTorqueReference, RestAtTheTargetUnderGravityIsStationary) {
         SCOPED_TRACE(path + " " + to_string(f) + " " + to_string(mode));
         const OcpWeights w = paper_weights(n, 1e-3);
         Shooting ocp(p.model, f, mode, w, q_ref, N);
-        EXPECT_LE((ocp.problem().cost().u_ref() - u_ref).cwiseAbs().maxCoeff(), 1e-12);
+        EXPECT_LE((ocp.problem().terms().u_ref(0) - u_ref).cwiseAbs().maxCoeff(), 1e-12);
         VecX<double> U(N * n);
         for (int i = 0; i < N; ++i) U.segment(i * n, n) = f == Formulation::kForwardDynamics ? u_ref : zero;
         VecX<double> F(N * n);

@@ -21,7 +21,7 @@ void check(const Eigen::Ref<const VecX<double>>& x, Eigen::Index n, const char* 
 }  // namespace
 
 QuadraticCost::QuadraticCost(OcpWeights weights, VecX<double> q_ref, int n)
-    : w_(std::move(weights)), q_ref_(std::move(q_ref)), u_ref_(VecX<double>::Zero(n)) {
+    : w_(std::move(weights)), q_ref_(std::move(q_ref)) {
   check(q_ref_, n, "q_ref", false);
   check(w_.Qq, n, "weight Qq", true);
   check(w_.Qv, n, "weight Qv", true);
@@ -34,11 +34,6 @@ double rotation_angle(const Mat3<double>& R, const Mat3<double>& R_ref) {
   const Mat3<double> A = R_ref.transpose() * R;
   const Vec3<double> s(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
   return std::atan2(0.5 * s.norm(), 0.5 * (A.trace() - 1.0));
-}
-
-void QuadraticCost::set_torque_reference(const In& u_ref) {
-  check(u_ref, q_ref_.size(), "torque reference u_ref", false);
-  u_ref_ = u_ref;
 }
 
 void QuadraticCost::set_target(const In& q_ref) {

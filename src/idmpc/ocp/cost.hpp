@@ -4,7 +4,7 @@
 /// conditions need:
 ///   φ(q, v)       = ½(q − q_ref)ᵀQ_q(q − q_ref) + ½(v − v_ref)ᵀQ_v(v − v_ref) + φ_frame(q)  (terminal)
 ///   L(q, v, a, u) = φ(q, v) + ½aᵀQ_a a + ½(u − u_ref)ᵀR(u − u_ref)   (stage; Q_a only in ID)
-/// u_ref is the torque that holds the target (DESIGN §8); zero until set. v_ref is zero but for a
+/// u_ref is the torque that holds the target (DESIGN §8). v_ref is zero but for a
 /// moving joint reference (its rate); φ_frame is the cost of an optional frame target
 /// (FrameTarget). QuadraticCost holds the weights and the fixed joint target; the references
 /// each stage sees, moving or not, are StageTerms' (stage_terms.hpp).
@@ -49,11 +49,7 @@ class QuadraticCost {
   int n() const { return static_cast<int>(q_ref_.size()); }
   const OcpWeights& weights() const { return w_; }
   const VecX<double>& q_ref() const { return q_ref_; }
-  const VecX<double>& u_ref() const { return u_ref_; }
-  /// @brief Sets u_ref (size n, finite; else std::invalid_argument), without allocating.
-  void set_torque_reference(const In& u_ref);
-  /// @brief Sets q_ref (size n, finite; else std::invalid_argument), without allocating; u_ref is
-  /// left as it is.
+  /// @brief Sets q_ref (size n, finite; else std::invalid_argument), without allocating.
   void set_target(const In& q_ref);
 
   /// @brief ∂L/∂a = Q_a a (inverse-dynamics problem only).
@@ -61,7 +57,7 @@ class QuadraticCost {
 
  private:
   OcpWeights w_;
-  VecX<double> q_ref_, u_ref_;
+  VecX<double> q_ref_;
 };
 
 }  // namespace idmpc

@@ -160,7 +160,6 @@ void StageTerms::update_joint_references() {
       joint_trajectory_->sample(t0_ + i * dtau_, q_ref_.col(i), v_ref_.col(i));
       u_ref_.col(i) = rnea(*model_, rnea_data_, q_ref_.col(i), zero_, zero_) - d_hat_;
     }
-    cost_.set_torque_reference(u_ref_.col(0));
     return;
   }
   u_ref_.col(0) = rnea(*model_, rnea_data_, cost_.q_ref(), zero_, zero_) - d_hat_;
@@ -169,7 +168,6 @@ void StageTerms::update_joint_references() {
     v_ref_.col(i).setZero();
     u_ref_.col(i) = u_ref_.col(0);
   }
-  cost_.set_torque_reference(u_ref_.col(0));
 }
 
 void StageTerms::update_frame_references() {
