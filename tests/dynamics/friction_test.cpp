@@ -26,6 +26,7 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/spatial/pack.hpp"
+#include "support/lanes.hpp"
 #include "support/problems.hpp"
 #include "support/random_model.hpp"
 
@@ -261,29 +262,13 @@ TEST_P(Friction, PackLanesEqualTheDoubleKernels) {
   while (static_cast<int>(ss.size()) < kStageLanes) ss.push_back(random_state(*ms_, rng, static_cast<int>(ss.size())));
   std::vector<VecX<double>> ws;
   for (int k = 0; k < kStageLanes; ++k) ws.push_back(test::random_vector(rng, n, 2.0));
-  VecX<StagePack> q(n), v(n), a(n), tau(n), w(n);
-  for (int j = 0; j < n; ++j) {
-    for (int k = 0; k < kStageLanes; ++k) {
-      const State& s = ss[static_cast<size_t>(k)];
-      q[j][k] = s.q[j];
-      v[j][k] = s.v[j];
-      a[j][k] = s.a[j];
-      tau[j][k] = s.tau[j];
-      w[j][k] = ws[static_cast<size_t>(k)][j];
-    }
-  }
-  const auto lane = [&](const VecX<StagePack>& x, int k) {
-    VecX<double> y(x.size());
-    for (Eigen::Index j = 0; j < x.size(); ++j) y[j] = x[j][k];
-    return y;
+  const auto member = [&](VecX<double> State::*x) {
+    std::vector<VecX<double>> out;
+    for (const State& s : ss) out.push_back(s.*x);
+    return test::packed(out);
   };
-  const auto lane_matrix = [&](const MatX<StagePack>& x, int k) {
-    MatX<double> y(x.rows(), x.cols());
-    for (Eigen::Index i = 0; i < x.rows(); ++i) {
-      for (Eigen::Index j = 0; j < x.cols(); ++j) y(i, j) = x(i, j)[k];
-    }
-    return y;
-  };
+  const VecX<StagePack> q = member(&State::q), v = member(&State::v), a = member(&State::a),
+                        tau = member(&State::tau), w = test::packed(ws);
   const auto rel = [](const MatX<double>& x, const MatX<double>& y) {
     return (x - y).cwiseAbs().maxCoeff() / std::max(1.0, y.cwiseAbs().maxCoeff());
   };
@@ -297,11 +282,11 @@ TEST_P(Friction, PackLanesEqualTheDoubleKernels) {
     SCOPED_TRACE("lane " + std::to_string(k));
     const State& s = ss[static_cast<size_t>(k)];
     rnea(model(), d, s.q, s.v, s.a);
-    EXPECT_LE(rel(lane(pd.tau, k), d.tau), kLanes) << "rnea";
+    EXPECT_LE(rel(test::lane(pd.tau, k), d.tau), kLanes) << "rnea";
     rnea_vjp(model(), d, ws[static_cast<size_t>(k)]);
-    EXPECT_LE(rel(lane(pd.g_q, k), d.g_q), kLanes) << "g_q";
-    EXPECT_LE(rel(lane(pd.g_v, k), d.g_v), kLanes) << "g_v";
-    EXPECT_LE(rel(lane(pd.g_a, k), d.g_a), kLanes) << "g_a";
+    EXPECT_LE(rel(test::lane(pd.g_q, k), d.g_q), kLanes) << "g_q";
+    EXPECT_LE(rel(test::lane(pd.g_v, k), d.g_v), kLanes) << "g_v";
+    EXPECT_LE(rel(test::lane(pd.g_a, k), d.g_a), kLanes) << "g_a";
   }
   // rnea derivatives
   rnea_derivatives(model(), pd, q, v, a);
@@ -309,10 +294,10 @@ TEST_P(Friction, PackLanesEqualTheDoubleKernels) {
     SCOPED_TRACE("lane " + std::to_string(k));
     const State& s = ss[static_cast<size_t>(k)];
     rnea_derivatives(model(), d, s.q, s.v, s.a);
-    EXPECT_LE(rel(lane(pd.tau, k), d.tau), kLanes) << "tau of rnea_derivatives";
-    EXPECT_LE(rel(lane_matrix(pd.dtau_dq, k), d.dtau_dq), kLanes) << "dtau_dq";
-    EXPECT_LE(rel(lane_matrix(pd.dtau_dv, k), d.dtau_dv), kLanes) << "dtau_dv";
-    EXPECT_LE(rel(lane_matrix(pd.M, k), d.M), kLanes) << "M";
+    EXPECT_LE(rel(test::lane(pd.tau, k), d.tau), kLanes) << "tau of rnea_derivatives";
+    EXPECT_LE(rel(test::lane(pd.dtau_dq, k), d.dtau_dq), kLanes) << "dtau_dq";
+    EXPECT_LE(rel(test::lane(pd.dtau_dv, k), d.dtau_dv), kLanes) << "dtau_dv";
+    EXPECT_LE(rel(test::lane(pd.M, k), d.M), kLanes) << "M";
   }
   // aba, its derivatives, and rnea at its result
   aba(model(), pd, q, v, tau);
@@ -322,17 +307,17 @@ TEST_P(Friction, PackLanesEqualTheDoubleKernels) {
     SCOPED_TRACE("lane " + std::to_string(k));
     const State& s = ss[static_cast<size_t>(k)];
     aba_derivatives(model(), d, s.q, s.v, s.tau);
-    EXPECT_LE(rel(lane(qdd, k), d.qdd), kLanes) << "aba";
-    EXPECT_LE(rel(lane_matrix(pd.da_dq, k), d.da_dq), kLanes) << "da_dq";
-    EXPECT_LE(rel(lane_matrix(pd.da_dv, k), d.da_dv), kLanes) << "da_dv";
-    EXPECT_LE(rel(lane_matrix(pd.Minv, k), d.Minv), kLanes) << "Minv";
+    EXPECT_LE(rel(test::lane(qdd, k), d.qdd), kLanes) << "aba";
+    EXPECT_LE(rel(test::lane(pd.da_dq, k), d.da_dq), kLanes) << "da_dq";
+    EXPECT_LE(rel(test::lane(pd.da_dv, k), d.da_dv), kLanes) << "da_dv";
+    EXPECT_LE(rel(test::lane(pd.Minv, k), d.Minv), kLanes) << "Minv";
   }
   aba(model(), pd, q, v, tau);
   rnea_after_aba(model(), pd, q, v);
   for (int k = 0; k < kStageLanes; ++k) {
     const State& s = ss[static_cast<size_t>(k)];
     aba(model(), d, s.q, s.v, s.tau);
-    EXPECT_LE(rel(lane(pd.tau, k), rnea_after_aba(model(), d, s.q, s.v)), kLanes) << "rnea_after_aba, lane " << k;
+    EXPECT_LE(rel(test::lane(pd.tau, k), rnea_after_aba(model(), d, s.q, s.v)), kLanes) << "rnea_after_aba, lane " << k;
   }
 }
 

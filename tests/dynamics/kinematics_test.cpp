@@ -21,6 +21,7 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/spatial/pack.hpp"
+#include "support/lanes.hpp"
 #include "support/random_model.hpp"
 #include "support/test_models.hpp"
 
@@ -306,18 +307,13 @@ TEST_P(KinematicsTest, PackLanesEqualTheDoublePath) {
     // each lane its own q and force
     std::vector<VecX<double>> q(kW);
     std::vector<Vec3<double>> f_lin(kW), f_ang(kW);
-    VecX<P> qp(n());
-    Vec3<P> f_lin_p, f_ang_p;
     for (int l = 0; l < kW; ++l) {
       q[l] = random_q(rng);
       f_lin[l] = random_vec3(rng);
       f_ang[l] = random_vec3(rng);
-      for (int i = 0; i < n(); ++i) qp[i][l] = q[l][i];
-      for (int a = 0; a < 3; ++a) {
-        f_lin_p[a][l] = f_lin[l][a];
-        f_ang_p[a][l] = f_ang[l][a];
-      }
     }
+    const VecX<P> qp = test::packed<P>(q);
+    const Vec3<P> f_lin_p = test::packed<P>(f_lin), f_ang_p = test::packed<P>(f_ang);
     fp.compute(*model_, qp);
     fp.jacobian(Jp);
     VecX<P> gp = VecX<P>::Constant(n(), P(0.0));
@@ -328,17 +324,10 @@ TEST_P(KinematicsTest, PackLanesEqualTheDoublePath) {
       fk.jacobian(J);
       VecX<double> g = VecX<double>::Zero(n());
       fk.add_jacobian_transpose_times(f_lin[l], f_ang[l], g);
-      const auto lane = [l](const auto& x) {
-        MatX<double> out(x.rows(), x.cols());
-        for (int r = 0; r < x.rows(); ++r) {
-          for (int col = 0; col < x.cols(); ++col) out(r, col) = x(r, col)[l];
-        }
-        return out;
-      };
-      EXPECT_LE(scaled_error(lane(fp.position()), fk.position()), kLanes);
-      EXPECT_LE(scaled_error(lane(fp.rotation()), fk.rotation()), kLanes);
-      EXPECT_LE(scaled_error(lane(Jp), J), kLanes);
-      EXPECT_LE(scaled_error(lane(gp), g), kLanes);
+      EXPECT_LE(scaled_error(test::lane(fp.position(), l), fk.position()), kLanes);
+      EXPECT_LE(scaled_error(test::lane(fp.rotation(), l), fk.rotation()), kLanes);
+      EXPECT_LE(scaled_error(test::lane(Jp, l), J), kLanes);
+      EXPECT_LE(scaled_error(test::lane(gp, l), g), kLanes);
     }
   }
 }
