@@ -72,10 +72,11 @@ struct Cell {
   std::string variant() const { return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting"); }
 };
 
-// the hash of the contents of a model file, the files it includes and its asset files
+// the hash of the contents of a model file, the files it includes and its asset files (not of
+// their paths: the same files in another --models directory are the same cells)
 std::string model_files_hash(const std::string& model) {
   std::string hashes;
-  for (const NamedPath& file : model_inputs(model)) hashes += file.path + "=" + file_hash(file.path) + "\n";
+  for (const NamedPath& file : model_inputs(model)) hashes += file.option + "=" + file_hash(file.path) + "\n";
   return text_hash(hashes);
 }
 

@@ -1612,7 +1612,7 @@ TEST_F(Cli, ACommandWhoseOutputCannotBeWrittenFails) {
 // the command while it renders
 TEST_F(Cli, SwingupVideoInterruptedLeavesNoTemporary) {
   const std::string cmd = "cd " + quote(dir_.string()) + " && exec " + quote(kBinary) + " swingup " + quote(kArm4) +
-                          " --duration 0.2 --video v.mp4 > .stdout 2> .stderr";
+                          " --duration 0.5 --video v.mp4 > .stdout 2> .stderr";
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
