@@ -99,7 +99,8 @@ AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
 
   // a fresh temporary beside the target, registered before it exists
   for (;;) {
-    tmp_ = target_ + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(g_temporary_counter++);
+    tmp_ = temporary_beside(target_, ".", ".tmp." + std::to_string(::getpid()) + "." +
+                                               std::to_string(g_temporary_counter++));
     registration_ = std::make_unique<TemporaryFile>(tmp_);
     fd_ = ::open(tmp_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
     if (fd_ >= 0) break;
@@ -180,6 +181,42 @@ void AtomicFile::fail(const std::string& what, int err) {
   if (!what.empty()) message += ": " + what;
   if (err) message += std::string(": ") + std::strerror(err);
   throw std::runtime_error(message);
+}
+
+AppendFile::AppendFile(std::string path) : path_(std::move(path)) {
+  do {
+    fd_ = ::open(path_.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  } while (fd_ < 0 && errno == EINTR);
+  if (fd_ < 0) throw std::runtime_error("cannot write '" + path_ + "': " + std::strerror(errno));
+}
+
+AppendFile::~AppendFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void AppendFile::append(const std::string& text) {
+  struct stat st {};
+  if (::fstat(fd_, &st) != 0) throw std::runtime_error("cannot write '" + path_ + "': " + std::strerror(errno));
+  const char* p = text.data();
+  std::size_t left = text.size();
+  int err = 0;
+  while (left > 0 && !err) {
+    const ssize_t n = ::write(fd_, p, left);
+    if (n < 0) {
+      if (errno != EINTR) err = errno;
+      continue;
+    }
+    p += n;
+    left -= static_cast<std::size_t>(n);
+  }
+  if (!err && ::fsync(fd_) != 0 && errno != EINVAL) err = errno;
+  if (err) {
+    // a regular file is cut back to where this piece began: it keeps every whole piece before it
+    if (S_ISREG(st.st_mode) && ::ftruncate(fd_, st.st_size) != 0) {
+      // nothing more to do: a torn last line is dropped when the file is read
+    }
+    throw std::runtime_error("cannot write '" + path_ + "': " + std::strerror(err));
+  }
 }
 
 }  // namespace idmpc::app

@@ -3,9 +3,10 @@
 /// @brief An output file written to a temporary name beside its target and renamed into place
 /// on commit(), so that an error never leaves a half-written file.
 ///
-/// - A regular target (or a new one) is written to `<target>.tmp.<pid>.<k>` in the target's
-///   directory and renamed onto it by commit(). An existing target keeps its permission bits
-///   (and, as root, its owner). The temporary is registered for removal on SIGINT/SIGTERM
+/// - A regular target (or a new one) is written to the hidden `.<name>.tmp.<pid>.<k>` in the
+///   target's directory (the name shortened where it would pass NAME_MAX) and renamed onto it
+///   by commit(). An existing target keeps its permission bits
+///   (and, as root, its owner). The temporary is registered for removal when a signal ends the process
 ///   (temporary_files.hpp) and removed by the destructor if commit() was never reached.
 /// - A symbolic link is followed: the temporary goes beside the link's final target and is
 ///   renamed onto that target, so the link stays a link.
@@ -63,6 +64,25 @@ class AtomicFile {
   std::unique_ptr<FdStreamBuf> buf_;
   std::unique_ptr<std::ostream> out_;
   std::unique_ptr<TemporaryFile> registration_;
+};
+
+/// @brief A file that grows by whole pieces: each append() is written and synced, or, if any
+/// write or the sync fails (a full disk, a file size limit), the file is cut back to its length
+/// before it, so that it never ends in half a piece.
+class AppendFile {
+ public:
+  /// Opens an existing file for appending.
+  /// @throws std::runtime_error naming the path and the reason
+  explicit AppendFile(std::string path);
+  AppendFile(const AppendFile&) = delete;
+  AppendFile& operator=(const AppendFile&) = delete;
+  ~AppendFile();
+  /// @throws std::runtime_error "cannot write 'path': File too large" (strerror of the failure)
+  void append(const std::string& text);
+
+ private:
+  std::string path_;
+  int fd_ = -1;
 };
 
 }  // namespace idmpc::app

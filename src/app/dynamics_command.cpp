@@ -71,7 +71,9 @@ bool parse_number(const std::string& field, double& x) {
 }
 
 void run(const DynamicsOptions& opt) {
-  check_output_paths({{"model", opt.model}, {"--in", opt.in}}, {{"--out", opt.out}});
+  std::vector<NamedPath> inputs = model_inputs(opt.model);
+  inputs.push_back({"--in", opt.in});
+  check_output_paths(inputs, {{"--out", opt.out}});
   const mj::LoadedModel loaded = mj::load_model_translated(opt.model);
   if (!loaded.translations.empty()) std::cerr << "idmpc: note: " << loaded.notice() << "\n";
   mj::ImportOptions options;
@@ -166,7 +168,9 @@ void register_dynamics(CLI::App& app) {
                   "CSV of rows q, v, x (3n comma-separated numbers; the first line may be a header "
                   "of names; at most 10^7 rows of 1 MiB)")
       ->required();
-  sub->add_option("--out", opt->out, "CSV output: tau0..tau{n-1},qacc0..qacc{n-1}")->required();
+  sub->add_option("--out", opt->out, "CSV output: tau0..tau{n-1},qacc0..qacc{n-1}")
+      ->required()
+      ->check(non_empty_path());
   sub->add_flag("--direct-torque", opt->direct_torque,
                 "ignore the model's actuators (only their validation)");
   sub->add_flag("--actuate-every-joint", opt->actuate_every_joint,

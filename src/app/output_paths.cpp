@@ -1,12 +1,16 @@
 #include "app/output_paths.hpp"
 
 #include "idmpc/experiment/file_paths.hpp"
+#include "idmpc/mujoco/mjcf_scan.hpp"
+
+#include <nlohmann/json.hpp>
 
 #include <sys/stat.h>
 
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <set>
 #include <stdexcept>
 
 namespace idmpc::app {
@@ -39,9 +43,12 @@ Identity identity(const std::string& path) {
     id.ino = st.st_ino;
     return id;
   }
+  // absolute first: weakly_canonical leaves a relative path whose first component does not
+  // exist as it is ("a.csv"), but makes "./a.csv" absolute
   std::error_code ec;
-  const fs::path canonical = fs::weakly_canonical(follow_links(path), ec);
-  id.canonical = ec ? fs::absolute(path).lexically_normal().string() : canonical.string();
+  const fs::path absolute = fs::absolute(follow_links(path), ec);
+  const fs::path canonical = ec ? fs::path() : fs::weakly_canonical(absolute, ec);
+  id.canonical = ec ? absolute.lexically_normal().string() : canonical.lexically_normal().string();
   return id;
 }
 
@@ -77,6 +84,49 @@ void check_output_paths(const std::vector<NamedPath>& inputs, const std::vector<
     }
     seen.emplace_back(&out, id);
   }
+}
+
+std::vector<NamedPath> model_inputs(const std::string& model, const std::string& option) {
+  std::vector<NamedPath> inputs{{option, model}};
+  if (model.empty()) return inputs;
+  // a model that cannot be read or scanned is left to the loader to report
+  try {
+    const std::vector<mj::MjcfElement> elements = mj::scan_mjcf(model);
+    std::set<std::string> listed{model};
+    for (const mj::MjcfElement& e : elements) {
+      if (listed.insert(e.file).second) inputs.push_back({option + "'s include", e.file});
+    }
+    for (const mj::AssetFile& a : mj::asset_files(elements, model)) {
+      if (listed.insert(a.resolved).second) inputs.push_back({option + "'s " + a.kind, a.resolved});
+    }
+  } catch (const std::exception&) {
+  }
+  return inputs;
+}
+
+void check_utf8_paths(const std::vector<NamedPath>& paths, const std::string& why) {
+  for (const NamedPath& p : paths) {
+    try {
+      (void)nlohmann::json(p.path).dump();
+    } catch (const nlohmann::json::exception&) {
+      std::string shown;  // the bytes that are no UTF-8 as \xNN
+      for (const unsigned char c : p.path) {
+        if (c < 0x80 && c >= 0x20) {
+          shown += static_cast<char>(c);
+        } else {
+          static const char* hex = "0123456789ABCDEF";
+          shown += std::string("\\x") + hex[c >> 4] + hex[c & 15];
+        }
+      }
+      throw std::invalid_argument(p.option + " '" + shown + "': expected a UTF-8 file name (" + why + ")");
+    }
+  }
+}
+
+CLI::Validator non_empty_path() {
+  return CLI::Validator(
+      [](std::string& value) { return value.empty() ? std::string("expected a file path, got ''") : std::string(); },
+      "");
 }
 
 }  // namespace idmpc::app

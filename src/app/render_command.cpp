@@ -1,4 +1,5 @@
 // idmpc render MODEL --log RUN.csv --out RUN.mp4: replays closed-loop logs off-screen to MP4.
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -52,8 +53,18 @@ void run_render(const RenderArgs& args) {
   options.camera = args.camera;
   options.overlay = !args.no_overlay;
   render::check_video_options(options);
-  std::vector<NamedPath> inputs{{"model", args.model}, {"--log", args.log}};
-  for (const std::string& path : args.compare) inputs.push_back({"--compare", path});
+  // inputs: the model with the files it includes, each log and the summary beside it (read for
+  // the run's label and model)
+  std::vector<NamedPath> inputs = model_inputs(args.model);
+  auto add_log = [&inputs](const std::string& option, const std::string& path) {
+    inputs.push_back({option, path});
+    if (path.empty()) return;
+    const std::string summary = std::filesystem::path(path).replace_extension(".json").string();
+    std::error_code ec;
+    if (std::filesystem::exists(summary, ec)) inputs.push_back({option + "'s summary", summary});
+  };
+  add_log("--log", args.log);
+  for (const std::string& path : args.compare) add_log("--compare", path);
   check_output_paths(inputs, {{"--out", args.out}});
   render::check_output_writable(args.out);
 
@@ -97,7 +108,7 @@ void register_render(CLI::App& app) {
                       "two run logs in one scene: the FD run blue, the other an orange core")
           ->expected(2);
   log->excludes(compare);
-  sub->add_option("--out,-o", args->out, "output video (.mp4)")->required();
+  sub->add_option("--out,-o", args->out, "output video (.mp4)")->required()->check(non_empty_path());
   sub->add_option("--width", args->width, "video width in pixels (even)")->capture_default_str();
   sub->add_option("--height", args->height, "video height in pixels (even)")
       ->capture_default_str();

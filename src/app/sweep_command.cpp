@@ -10,16 +10,19 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <regex>
 #include <set>
 #include <sstream>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
 #include <unistd.h>
 
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
 #include "app/data_dir_option.hpp"
+#include "app/output_paths.hpp"
 #include "app/swingup.hpp"
 #include "idmpc/experiment/data_dir.hpp"
 #include "idmpc/mujoco/task_run.hpp"
@@ -69,11 +72,21 @@ struct Cell {
   std::string variant() const { return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting"); }
 };
 
-// the hash of the task as the cell runs it, so that a resumed sweep never mixes settings
+// the hash of the contents of a model file, the files it includes and its asset files (not of
+// their paths: the same files in another --models directory are the same cells)
+std::string model_files_hash(const std::string& model) {
+  std::string hashes;
+  for (const NamedPath& file : model_inputs(model)) hashes += file.option + "=" + file_hash(file.path) + "\n";
+  return text_hash(hashes);
+}
+
+// the hash of the task as the cell runs it and of the model files it runs on (their contents),
+// so that a resumed sweep never mixes settings or models
 std::string settings_hash(Task task, const std::string& model) {
+  const std::string files = model_files_hash(task.model);
   task.model = model;  // as named in the grid, not where --models happens to put it
   task.source.clear();
-  return text_hash(to_json(task).dump());
+  return text_hash(to_json(task).dump() + "\n" + files);
 }
 
 struct CellResult {
@@ -762,6 +775,29 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   return r;
 }
 
+// the cell as the progress lines and errors name it
+std::string cell_label(const Cell& c) {
+  return c.model + " " + (c.formulation == "fd" ? "FD" : "ID") + " " + c.variant() +
+         (task_table(c.table) ? (c.offset_free ? ", offset-free on" : ", offset-free off") : "") +
+         " N=" + std::to_string(c.N) + " kmax=" + std::to_string(c.kmax);
+}
+
+// the temporaries of a sweep killed before it could remove them (AtomicFile's
+// `.<name>.tmp.<pid>.<k>` of the tables and the logs) whose process is gone; called with the
+// directory locked, so no other sweep is writing there
+void remove_stale_temporaries(const std::string& dir) {
+  static const std::regex pattern(R"(\.?(?:(?:sweep|arms|tracking)\.(?:csv|md)|log_.*)\.tmp\.([0-9]+)\.[0-9]+)");
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    std::smatch m;
+    if (!std::regex_match(name, m, pattern) || !entry.is_regular_file(ec)) continue;
+    const long pid = std::strtol(m[1].str().c_str(), nullptr, 10);
+    const bool gone = pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+    if (gone) std::filesystem::remove(entry.path(), ec);
+  }
+}
+
 void run(const SweepOptions& opt) {
   namespace fs = std::filesystem;
   if (!(opt.duration > 0)) throw std::invalid_argument("--duration must be positive");
@@ -771,6 +807,14 @@ void run(const SweepOptions& opt) {
   for (const Cell& c : cells) {
     if (!fs::exists(cell_file(opt, c))) {
       throw std::invalid_argument("'" + cell_file(opt, c) + "' not found (see --models)");
+    }
+  }
+  // every cell's settings are checked before any file is made (e.g. a --duration of no step)
+  for (const Cell& c : cells) {
+    try {
+      const mj::TaskRun check(cell_task(base, c, opt));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument("cell " + cell_label(c) + " cannot run: " + e.what());
     }
   }
   fs::create_directories(opt.out_dir);
@@ -786,6 +830,7 @@ void run(const SweepOptions& opt) {
   if (::flock(dir_fd, LOCK_EX | LOCK_NB) != 0) {
     throw std::runtime_error("another sweep is writing into '" + opt.out_dir + "' (it is locked); wait for it or use another --out");
   }
+  remove_stale_temporaries(opt.out_dir);
   std::map<std::string, CellResult> done = read_finished(csv, cells);
 
   // rewrite the finished cells cleanly, then append each new cell as soon as it ends
@@ -798,24 +843,30 @@ void run(const SweepOptions& opt) {
     }
     f.commit();
   }
-  std::ofstream append(csv, std::ios::app);
+  // each finished cell is one whole row, synced before the next cell starts; a row that cannot
+  // be written (a full disk, a file size limit) ends the sweep with the rows before it kept
+  AppendFile append(csv);
   int index = 0;
   for (const Cell& c : cells) {
     ++index;
     const bool arm = task_table(c.table);
-    std::fprintf(stderr, "[%d/%zu] %s %s %s%s N=%d kmax=%d: ", index, cells.size(), c.model.c_str(),
-                 c.formulation == "fd" ? "FD" : "ID", c.variant().c_str(),
-                 arm ? (c.offset_free ? ", offset-free on" : ", offset-free off") : "", c.N, c.kmax);
+    std::fprintf(stderr, "[%d/%zu] %s: ", index, cells.size(), cell_label(c).c_str());
     if (done.count(c.key())) {
       std::fprintf(stderr, "done earlier\n");
       continue;
     }
-    const CellResult r = run_cell(base, c, opt);
+    CellResult r;
+    try {
+      r = run_cell(base, c, opt);
+    } catch (...) {
+      std::fputc('\n', stderr);  // the error goes on a line of its own
+      throw;
+    }
     const std::string outcome = r.diverged ? "diverged at " + fmt(r.diverged_at) + " s"
                                 : arm      ? (r.reached ? "reached the target" : "did not reach the target")
                                            : "ok";
     std::fprintf(stderr, "%.4g ms per update, %s\n", r.mean_ms, outcome.c_str());
-    append << csv_row(tables, r) << '\n' << std::flush;
+    append.append(csv_row(tables, r) + "\n");
     done[c.key()] = r;
     AtomicFile f(md);
     f.stream() << markdown(tables, cells, done, opt);
@@ -833,7 +884,8 @@ void register_sweep(CLI::App& app) {
   auto opt = std::make_shared<SweepOptions>();
   CLI::App* sub = app.add_subcommand("sweep", "The paper's grids closed-loop (Tables 1-3), resumable");
   sub->add_option("--out", opt->out_dir, "output directory (sweep.csv and sweep.md; arms: arms.csv and arms.md)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(non_empty_path());
   sub->add_option("--models", opt->models_dir,
                   "directory with the models of mjcf/paper_tables.json (and arms.json, the default --arms-tasks); "
                   "default: mjcf/ of the data directory");

@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <unistd.h>
 
 #include "app/atomic_file.hpp"
@@ -9,6 +10,7 @@
 #include "app/data_dir_option.hpp"
 #include "app/output_paths.hpp"
 #include "app/swingup.hpp"
+#include "app/temporary_files.hpp"
 #ifdef IDMPC_HAVE_RENDER
 #include "idmpc/render/progress_printer.hpp"
 #include "idmpc/render/video.hpp"
@@ -32,15 +34,22 @@ void register_swingup(CLI::App& app) {
       "swingup", "One closed-loop run of a task by C/GMRES (FD or ID) with MuJoCo in the loop");
   add_task_options(*sub, opt->run);
   add_data_dir_option(*sub);
-  sub->add_option("--log", opt->log, "CSV log, one row per control step");
-  sub->add_option("--summary", opt->summary, "JSON summary");
-  sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)");
+  sub->add_option("--log", opt->log, "CSV log, one row per control step")->check(non_empty_path());
+  sub->add_option("--summary", opt->summary, "JSON summary")->check(non_empty_path());
+  sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)")
+      ->check(non_empty_path());
   sub->callback([opt] {
     const Task task = make_task(opt->run);
     // outputs checked before the run: none is an input or another output, a directory or
     // unwritable, and a video has its encoder
-    check_output_paths({{"model", task.model}, {"--task", opt->run.task_file}},
-                       {{"--log", opt->log}, {"--summary", opt->summary}, {"--video", opt->video}});
+    std::vector<NamedPath> inputs = model_inputs(task.model);
+    inputs.push_back({"--task", opt->run.task_file});
+    check_output_paths(inputs, {{"--log", opt->log}, {"--summary", opt->summary}, {"--video", opt->video}});
+    // the summary records the model, the task file and the log by name
+    if (!opt->summary.empty()) {
+      check_utf8_paths({{"model", task.model}, {"--task", opt->run.task_file}, {"--log", opt->log}},
+                       "--summary records it in JSON");
+    }
     if (!opt->log.empty()) AtomicFile probe(opt->log);
     if (!opt->summary.empty()) AtomicFile probe(opt->summary);
 #ifndef IDMPC_HAVE_RENDER
@@ -53,10 +62,21 @@ void register_swingup(CLI::App& app) {
       }
     }
 #endif
-    // a video needs a log: without --log, a temporary one beside the video
+    // a video needs a log: without --log, a temporary one in the temporary directory, removed
+    // however the command ends
     std::string log = opt->log;
     const bool temporary_log = log.empty() && !opt->video.empty();
-    if (temporary_log) log = opt->video + ".log." + std::to_string(::getpid()) + ".csv";
+    std::optional<TemporaryFile> log_registration;
+    struct Cleanup {
+      std::string path;
+      ~Cleanup() { if (!path.empty()) std::remove(path.c_str()); }
+    } cleanup;
+    if (temporary_log) {
+      log = (std::filesystem::temp_directory_path() / ("idmpc-video-log.tmp." + std::to_string(::getpid()) + ".csv"))
+                .string();
+      log_registration.emplace(log);
+      cleanup.path = log;
+    }
     SwingupOutcome out = run_swingup(task, log, opt->run.fallback);
     if (!opt->summary.empty()) write_json(to_json(out.summary), opt->summary);
     std::cout << human_summary(out.summary);
@@ -66,10 +86,6 @@ void register_swingup(CLI::App& app) {
     command_exit_code() = out.summary.diverged ? kDiverged : out.summary.reached ? kReached : kNotReached;
 #ifdef IDMPC_HAVE_RENDER
     if (!opt->video.empty()) {
-      struct Cleanup {
-        std::string path;
-        ~Cleanup() { if (!path.empty()) std::remove(path.c_str()); }
-      } cleanup{temporary_log ? log : ""};
       render::RunLog run = render::read_run_log(log);
       run.formulation = task.formulation;
       run.derivatives = task.derivatives;

@@ -9,13 +9,27 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <memory>
+
+#ifdef IDMPC_HAVE_RENDER
+#include "idmpc/render/video_writer.hpp"
+#endif
 
 namespace idmpc::app {
 namespace {
 
 // at most this many temporaries at once (a swingup holds two or three)
 constexpr int kSlots = 32;
-constexpr int kSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGPIPE};
+// every signal whose default action ends the process and that can be caught, except those of a
+// fault of the process itself (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP, SIGSYS): they
+// keep their default (or a sanitizer's) handling and core dump
+constexpr int kSignals[] = {SIGINT,  SIGTERM, SIGHUP,  SIGPIPE,   SIGQUIT, SIGUSR1, SIGUSR2, SIGXFSZ,
+                            SIGXCPU, SIGALRM, SIGVTALRM, SIGPROF, SIGIO,   SIGPWR
+#ifdef SIGSTKFLT
+                            ,
+                            SIGSTKFLT
+#endif
+};
 
 enum SlotState : int { kFree = 0, kFilling = 1, kLive = 2 };
 
@@ -27,8 +41,16 @@ static_assert(std::atomic<int>::is_always_lock_free, "the signal handler needs l
 
 // the registry: the handler can reach nothing but statics
 Slot g_slots[kSlots];
+// child processes writing temporaries (0: a free slot)
+std::atomic<pid_t> g_children[kSlots];
+static_assert(std::atomic<pid_t>::is_always_lock_free, "the signal handler needs lock-free atomics");
 
 extern "C" void remove_temporaries_and_reraise(int sig) {
+  // a child writing a temporary first, so that it cannot create it again
+  for (std::atomic<pid_t>& child : g_children) {
+    const pid_t pid = child.load();
+    if (pid > 0) ::kill(pid, SIGKILL);
+  }
   // unlink every live temporary; a slot being filled has no file yet
   for (Slot& s : g_slots) {
     if (s.state.load() == kLive) ::unlink(s.path);
@@ -63,6 +85,11 @@ void install_temporary_file_cleanup() {
       if (old.sa_handler == SIG_IGN) continue;  // e.g. SIGINT of a background job
       sigaction(sig, &action, nullptr);
     }
+#ifdef IDMPC_HAVE_RENDER
+    render::set_temporary_registrar(
+        [](const std::string& path) -> std::shared_ptr<void> { return std::make_shared<TemporaryFile>(path); },
+        [](pid_t pid) -> std::shared_ptr<void> { return std::make_shared<ChildProcess>(pid); });
+#endif
   });
 }
 
@@ -87,6 +114,21 @@ void TemporaryFile::release() {
   if (slot_ < 0) return;
   g_slots[slot_].state.store(kFree);
   slot_ = -1;
+}
+
+ChildProcess::ChildProcess(pid_t pid) {
+  for (int k = 0; k < kSlots; ++k) {
+    pid_t expected = 0;
+    if (g_children[k].compare_exchange_strong(expected, pid)) {
+      slot_ = k;
+      return;
+    }
+  }
+  throw std::runtime_error("more than " + std::to_string(kSlots) + " child processes at once");
+}
+
+ChildProcess::~ChildProcess() {
+  if (slot_ >= 0) g_children[slot_].store(0);
 }
 
 int registered_temporary_files() {

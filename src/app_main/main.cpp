@@ -1,8 +1,12 @@
 // idmpc: command-line front end; each sub-command lives in src/app/<name>_command.cpp.
 // Every error, a command-line one included, is one line "idmpc: error: …" and exit code 1;
-// --help and --version print to stdout and exit 0.
+// --help and --version print to stdout and exit 0. Standard output is flushed at the end: a
+// command whose output could not be written (a full disk, /dev/full) fails.
 #include <cctype>
+#include <cerrno>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <sstream>
@@ -70,10 +74,8 @@ std::string unexpected_arguments(const std::string& what, const std::vector<std:
          (extras.size() > 1 ? "s" : "") + " '" + ordered + "'";
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  idmpc::app::install_temporary_file_cleanup();
+// the command: its exit code
+int run(int argc, char** argv) {
   CLI::App app{"idmpc: NMPC of robot arms by C/GMRES on forward vs inverse dynamics, "
                "with MuJoCo in the loop"};
   app.set_version_flag("--version", std::string("idmpc " IDMPC_VERSION " (MuJoCo ") +
@@ -113,4 +115,25 @@ int main(int argc, char** argv) {
     return 1;
   }
   return idmpc::app::command_exit_code();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  idmpc::app::install_temporary_file_cleanup();
+  const int code = run(argc, argv);
+  // what the command printed must have reached its destination
+  // (std::cout writes through stdout's buffer: its flush would be the first to fail, and a
+  // second fflush has no error number to tell)
+  errno = 0;
+  const bool flushed = std::fflush(stdout) == 0;
+  const int err = errno;
+  std::cout.flush();
+  if (!flushed || std::ferror(stdout) || std::cout.fail()) {
+    if (code == 1) return code;  // its error is said already
+    std::cerr << "idmpc: error: cannot write to standard output"
+              << (err ? std::string(": ") + std::strerror(err) : std::string()) << "\n";
+    return 1;
+  }
+  return code;
 }

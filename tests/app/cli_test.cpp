@@ -1161,6 +1161,7 @@ TEST_P(CliSwingupOutputs, ThatAreInputsOrEachOtherAreRefusedBeforeTheRun) {
   write("task.json", R"({"model": "model.xml", "duration": 0.05})");
   write("run.csv", "old log\n");
   fs::create_symlink("run.csv", dir_ / "alias.csv");
+  fs::create_directory(dir_ / "sub");
   const Result r = idmpc("swingup " + options);
   SCOPED_TRACE("idmpc swingup " + options);
   expect_error(r, needles);
@@ -1170,12 +1171,15 @@ TEST_P(CliSwingupOutputs, ThatAreInputsOrEachOtherAreRefusedBeforeTheRun) {
   EXPECT_EQ(slurp(dir_ / "task.json"), R"({"model": "model.xml", "duration": 0.05})");
   EXPECT_EQ(slurp(dir_ / "run.csv"), "old log\n");
   EXPECT_FALSE(fs::exists(dir_ / "other.json"));
+  EXPECT_FALSE(fs::exists(dir_ / "a.csv"));
   expect_no_temporaries();
 }
 
 std::string output_case_name(const ::testing::TestParamInfo<std::pair<std::string, std::vector<std::string>>>& info) {
   static const std::vector<std::string> names = {"log_is_summary",   "linked_log_is_summary", "log_is_video",
-                                                 "summary_is_model", "log_is_task_file",      "video_is_the_tasks_model"};
+                                                 "summary_is_model", "log_is_task_file",      "video_is_the_tasks_model",
+                                                 "new_log_is_dot_slash_summary", "new_log_is_absolute_summary",
+                                                 "new_log_is_dot_dot_summary", "new_log_is_dot_slash_video"};
   return names.at(info.index);
 }
 
@@ -1187,7 +1191,12 @@ INSTANTIATE_TEST_SUITE_P(
         std::make_pair("model.xml --log run.csv --video run.csv", std::vector<std::string>{"--video 'run.csv'", "--log 'run.csv'"}),
         std::make_pair("model.xml --log other.csv --summary model.xml", std::vector<std::string>{"--summary 'model.xml'", "model 'model.xml'"}),
         std::make_pair("--task task.json --summary other.json --log task.json", std::vector<std::string>{"--log 'task.json'", "--task 'task.json'"}),
-        std::make_pair("--task task.json --log run.csv --summary other.json --video model.xml", std::vector<std::string>{"--video 'model.xml'", "model.xml"})),
+        std::make_pair("--task task.json --log run.csv --summary other.json --video model.xml", std::vector<std::string>{"--video 'model.xml'", "model.xml"}),
+        // files not there yet, spelled in different ways
+        std::make_pair("model.xml --log a.csv --summary ./a.csv", std::vector<std::string>{"--summary './a.csv'", "--log 'a.csv'"}),
+        std::make_pair("model.xml --log a.csv --summary \"$PWD/a.csv\"", std::vector<std::string>{"--summary '/", "--log 'a.csv'"}),
+        std::make_pair("model.xml --log a.csv --summary sub/../a.csv", std::vector<std::string>{"--summary 'sub/../a.csv'", "--log 'a.csv'"}),
+        std::make_pair("model.xml --log a.csv --video ./a.csv", std::vector<std::string>{"--video './a.csv'", "--log 'a.csv'"})),
     output_case_name);
 
 TEST_F(Cli, SwingupRefusesADirectoryLogBeforeRunning) {
@@ -1233,7 +1242,7 @@ TEST_P(CliInterrupted, DynamicsLeavesNoTemporary) {
   const int sig = GetParam();
   const fs::path fifo = dir_ / "in.fifo";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
-  const std::string cmd = "cd " + quote(dir_.string()) + " && exec " + quote(kBinary) + " dynamics " +
+  const std::string cmd = "cd " + quote(dir_.string()) + " && ulimit -c 0 && exec " + quote(kBinary) + " dynamics " +
                           quote(kArm4) + " --in in.fifo --out out.csv 2> .stderr";
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
@@ -1269,8 +1278,12 @@ TEST_P(CliInterrupted, DynamicsLeavesNoTemporary) {
   expect_no_temporaries();
 }
 
-INSTANTIATE_TEST_SUITE_P(Signals, CliInterrupted, ::testing::Values(SIGINT, SIGTERM),
-                         [](const auto& info) { return std::string(info.param == SIGINT ? "SIGINT" : "SIGTERM"); });
+// every signal that ends the process and can be caught removes the temporaries (those of a
+// fault of the process itself excepted)
+INSTANTIATE_TEST_SUITE_P(Signals, CliInterrupted,
+                         ::testing::Values(SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGUSR1, SIGUSR2, SIGXFSZ, SIGXCPU,
+                                           SIGALRM),
+                         [](const auto& info) { return std::string("SIG") + sigabbrev_np(info.param); });
 
 // ---------------------------------------------------------------------------------------------
 // dynamics: hostile inputs
@@ -1527,6 +1540,204 @@ TEST_F(Cli, CheckRefusesAHugeTextureBeforeLoadingIt) {
                                       R"(<asset><texture name="sky" type="skybox" builtin="gradient" width="40000" height="40000"/></asset>)"));
   const Result r = idmpc("check model.xml", kMemoryCap);
   expect_error(r, {"'sky'", "40000x40000", "8192x8192"});
+}
+
+// ---------------------------------------------------------------------------------------------
+// nothing lost: outputs checked before any work, failed writes reported, no stray files
+
+// a model that includes part.xml (arm4): the included file is an input too
+TEST_F(Cli, SwingupRefusesAnOutputThatTheModelIncludes) {
+  fs::copy_file(kArm4, dir_ / "part.xml");
+  write("main.xml", R"(<mujoco model="main"><include file="part.xml"/></mujoco>)");
+  const Result r = idmpc("swingup main.xml --duration 0.01 --log part.xml");
+  expect_error(r, {"--log 'part.xml'", "include"});
+  EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+  EXPECT_EQ(slurp(dir_ / "part.xml"), slurp(kArm4));
+  expect_no_temporaries();
+}
+
+// render reads the summary beside its log: an output onto it is refused
+TEST_F(Cli, RenderRefusesAnOutputThatIsTheSummaryOfItsLog) {
+  ASSERT_EQ(idmpc("swingup " + quote(kArm4) + " --duration 0.01 --log run.csv --summary run.json").code, 2);
+  const std::string summary = slurp(dir_ / "run.json");
+  const Result r = idmpc("render " + quote(kArm4) + " --log run.csv --out run.json");
+  if (r.err.find("without rendering") != std::string::npos) GTEST_SKIP() << "no renderer in this build";
+  expect_error(r, {"--out 'run.json'", "--log's summary 'run.json'"});
+  EXPECT_EQ(slurp(dir_ / "run.json"), summary);
+  expect_no_temporaries();
+}
+
+// a file name that JSON cannot hold is refused before the run, not after it
+TEST_F(Cli, SwingupRefusesALogNameItsSummaryCannotRecordBeforeRunning) {
+  const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.01 --log $(printf 'run\\377.csv') --summary s.json");
+  expect_error(r, {"--log 'run\\xFF.csv'", "UTF-8"});
+  EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(files(), std::vector<std::string>{}) << "nothing written";
+}
+
+// empty output paths are refused, naming the option
+TEST_F(Cli, EmptyOutputPathsAreRefused) {
+  for (const std::string& args :
+       {"swingup " + quote(kArm4) + " --duration 0.01 --log ''", "swingup " + quote(kArm4) + " --summary ''",
+        "dynamics " + quote(kArm4) + " --in in.csv --out ''", std::string("sweep --tables 3 --out ''")}) {
+    SCOPED_TRACE(args);
+    const Result r = idmpc(args);
+    expect_error(r, {"--", "''"});
+    EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+    EXPECT_EQ(r.out, "");
+  }
+  EXPECT_EQ(files(), std::vector<std::string>{});
+}
+
+// a valid output name of 250 bytes is written (its temporary must fit NAME_MAX too)
+TEST_F(Cli, SwingupWritesOutputsWithLongNames) {
+  const std::string log = std::string(246, 'l') + ".csv", summary = std::string(245, 's') + ".json";
+  const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.01 --log " + log + " --summary " + summary);
+  ASSERT_EQ(r.code, 2) << r.err;
+  EXPECT_EQ(slurp(dir_ / log).rfind("t,q0,", 0), 0u);
+  EXPECT_NE(slurp(dir_ / summary).find("\"steps\""), std::string::npos);
+  expect_no_temporaries();
+}
+
+// what a command prints must reach standard output, or the command fails
+TEST_F(Cli, ACommandWhoseOutputCannotBeWrittenFails) {
+  if (!fs::exists("/dev/full")) GTEST_SKIP() << "no /dev/full";
+  const Result r = test::run_command("( " + quote(kBinary) + " check " + quote(kArm4) + " > /dev/full )", dir_);
+  expect_error(r, {"standard output", "No space left on device"});
+  EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+}
+
+// a video's temporaries (its log, the video being encoded, ffmpeg's log) go when a signal ends
+// the command while it renders
+TEST_F(Cli, SwingupVideoInterruptedLeavesNoTemporary) {
+  const std::string cmd = "cd " + quote(dir_.string()) + " && exec " + quote(kBinary) + " swingup " + quote(kArm4) +
+                          " --duration 0.5 --video v.mp4 > .stdout 2> .stderr";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // wait until ffmpeg has begun the video: its temporary beside v.mp4 has bytes
+  using clock = std::chrono::steady_clock;
+  const auto deadline = clock::now() + std::chrono::seconds(20);
+  bool encoding = false;
+  int status = 0;
+  bool exited = false;
+  while (!encoding && !exited && clock::now() < deadline) {
+    for (const auto& e : fs::directory_iterator(dir_)) {
+      const std::string name = e.path().filename().string();
+      std::error_code ec;
+      encoding |= name.rfind(".v.mp4.tmp.", 0) == 0 && fs::file_size(e.path(), ec) > 0 && !ec;
+    }
+    exited = ::waitpid(pid, &status, WNOHANG) == pid;
+    if (!encoding) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  if (!exited) {
+    ::kill(pid, SIGTERM);
+    ::waitpid(pid, &status, 0);
+  }
+  const std::string err = slurp(dir_ / ".stderr");
+  if (err.find("no renderer") != std::string::npos) GTEST_SKIP() << "no renderer in this build";
+  ASSERT_TRUE(encoding) << "the video was never begun: " << err;
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << "status " << status << ": " << err;
+  fs::remove(dir_ / ".stdout");
+  fs::remove(dir_ / ".stderr");
+  EXPECT_EQ(files(), std::vector<std::string>{}) << "left behind in the output's directory";
+  const std::string mark = ".tmp." + std::to_string(pid) + ".";
+  for (const auto& e : fs::directory_iterator(fs::temp_directory_path())) {
+    EXPECT_EQ(e.path().filename().string().find(mark), std::string::npos) << "left behind: " << e.path();
+  }
+}
+
+// a sweep whose row cannot be written (a file size limit; SIGXFSZ ignored, so the write fails
+// with EFBIG) says so in one line, exits non-zero and keeps every finished row whole
+TEST_F(Cli, SweepKeepsItsFinishedRowsWhenARowCannotBeWritten) {
+  const std::string args = "sweep --tables 3 --duration 0.01 --out sweep";
+  // a limit of 1024 bytes (two of the shell's 512-byte blocks): sweep.md (~760 bytes) passes,
+  // sweep.csv (~1650 bytes for its 8 rows) does not
+  const int blocks = 2;
+  // the limit holds for the sweep only: its output goes through a pipe, its exit code to a file
+  Result r = test::run_command("( trap '' XFSZ; ulimit -f " + std::to_string(blocks) + "; " + quote(kBinary) + " " +
+                                   args + "; echo $? > .code ) 2>&1 | cat",
+                               dir_);
+  r.code = std::stoi("0" + slurp(dir_ / ".code"));
+  r.err = r.out;  // stdout and stderr together
+  fs::remove(dir_ / ".code");
+  expect_error(r, {"cannot write 'sweep/sweep.csv'", "File too large"});
+  EXPECT_EQ(r.err.find("written"), std::string::npos) << r.err;
+  const std::vector<std::string> err = lines_of(r.err);
+  ASSERT_FALSE(err.empty());
+  EXPECT_EQ(err.back().rfind("idmpc: error: ", 0), 0u) << r.err;
+  const std::vector<std::string> rows = lines_of(slurp(dir_ / "sweep" / "sweep.csv"));
+  ASSERT_GE(rows.size(), 2u) << "the rows that fit are kept";
+  ASSERT_LT(rows.size(), 9u);
+  for (const std::string& row : rows) EXPECT_EQ(split(row).size(), split(rows[0]).size()) << row;
+  EXPECT_EQ(slurp(dir_ / "sweep" / "sweep.csv").back(), '\n');
+  for (const auto& e : fs::directory_iterator(dir_ / "sweep")) {
+    EXPECT_EQ(e.path().filename().string().find(".tmp."), std::string::npos) << e.path();
+  }
+  // resumed without the limit: the kept rows are done
+  const Result again = idmpc(args);
+  ASSERT_EQ(again.code, 0) << again.err;
+  size_t done = 0;
+  for (size_t pos = again.err.find("done earlier"); pos != std::string::npos; pos = again.err.find("done earlier", pos + 1)) {
+    ++done;
+  }
+  EXPECT_EQ(done, rows.size() - 1) << again.err;
+}
+
+// the settings of every cell are checked before any file is made; the error has its own line
+TEST_F(Cli, SweepRefusesABadDurationBeforeMakingAnyFile) {
+  const Result r = idmpc("sweep --tables 3 --duration 1e-9 --out sweep");
+  expect_error(r, {"duration"});
+  EXPECT_EQ(lines_of(r.err).size(), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind("idmpc: error: ", 0), 0u) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "sweep"));
+}
+
+// a resumed sweep removes the temporaries that a killed sweep left in its directory, and only those
+TEST_F(Cli, SweepRemovesTheTemporariesOfAKilledSweep) {
+  const pid_t dead = ::fork();
+  ASSERT_GE(dead, 0);
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string d = std::to_string(dead), alive = std::to_string(::getpid());
+  fs::create_directory(dir_ / "sweep");
+  const std::vector<std::string> stale = {".arms.csv.tmp." + d + ".0", ".arms.md.tmp." + d + ".3",
+                                          "arms.csv.tmp." + d + ".1", ".log_arms_touch_fd_matrix_N10_k5.csv.tmp." + d + ".2"};
+  const std::vector<std::string> kept = {".arms.md.tmp." + alive + ".0", "notes.tmp.txt", ".other.csv.tmp." + d + ".0"};
+  for (const std::string& name : stale) std::ofstream(dir_ / "sweep" / name) << "half";
+  for (const std::string& name : kept) std::ofstream(dir_ / "sweep" / name) << "keep";
+  fs::create_directories(dir_ / "mine");
+  write("mine/touch.xml", kTouchModel);
+  write("mine/touch.json", kTouchTask);
+  write("mine/list.json", R"({"tasks": ["touch.json"]})");
+  const Result r = idmpc("sweep --arms-tasks mine/list.json --duration 0.01 --out sweep");
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const std::string& name : stale) EXPECT_FALSE(fs::exists(dir_ / "sweep" / name)) << name;
+  for (const std::string& name : kept) EXPECT_TRUE(fs::exists(dir_ / "sweep" / name)) << name;
+}
+
+// a resumed sweep whose model file changed does not take the old cells for its own
+TEST_F(Cli, SweepResumedWithAChangedModelKeepsNoOldCell) {
+  fs::create_directories(dir_ / "mine");
+  write("mine/touch.xml", kTouchModel);
+  write("mine/touch.json", kTouchTask);
+  write("mine/list.json", R"({"tasks": ["touch.json"]})");
+  const std::string args = "sweep --arms-tasks mine/list.json --duration 0.01 --out sweep";
+  ASSERT_EQ(idmpc(args).code, 0);
+  const std::string before = slurp(dir_ / "sweep" / "arms.csv");
+  // the same model with other masses: other results
+  std::string model = kTouchModel;
+  const size_t mass = model.find("mass=\"");
+  ASSERT_NE(mass, std::string::npos);
+  model.insert(mass + 6, "1");
+  write("mine/touch.xml", model);
+  const Result r = idmpc(args);
+  expect_error(r, {"arms.csv", "other settings"});
+  EXPECT_EQ(slurp(dir_ / "sweep" / "arms.csv"), before) << "the earlier results must be kept";
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <sys/stat.h>
 
+#include <climits>
+
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -21,6 +23,15 @@ std::string follow_links(const std::string& path) {
     p = link.is_absolute() ? link : p.parent_path() / link;
   }
   throw std::runtime_error("cannot write '" + path + "': " + std::strerror(ELOOP));
+}
+
+std::string temporary_beside(const std::string& target, const std::string& prefix, const std::string& suffix) {
+  namespace fs = std::filesystem;
+  const fs::path t(target);
+  std::string name = t.filename().string();
+  const std::size_t room = NAME_MAX > prefix.size() + suffix.size() ? NAME_MAX - prefix.size() - suffix.size() : 0;
+  if (name.size() > room) name.resize(room);
+  return (t.parent_path() / (prefix + name + suffix)).string();
 }
 
 }  // namespace idmpc

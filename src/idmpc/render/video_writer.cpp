@@ -9,6 +9,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -23,6 +24,44 @@ extern char** environ;
 
 namespace idmpc::render {
 namespace {
+
+TemporaryRegistrar& registrar() {
+  static TemporaryRegistrar r;
+  return r;
+}
+ChildRegistrar& child_registrar() {
+  static ChildRegistrar r;
+  return r;
+}
+
+// the registration of a temporary, or none (a registrar that cannot take it)
+std::shared_ptr<void> register_temporary(const std::string& path) noexcept {
+  try {
+    return registrar() ? registrar()(path) : nullptr;
+  } catch (...) {
+    return nullptr;
+  }
+}
+
+// creates a new file `prefix + name + ".tmp.<pid>.<k>" + suffix` beside `target` (shortened to fit
+// NAME_MAX), registered before it exists; errno is kept on failure (-1)
+int create_temporary(const std::string& target, const std::string& prefix, const std::string& suffix,
+                     std::string& path, std::shared_ptr<void>& guard) {
+  static std::atomic<unsigned> counter{0};
+  for (;;) {
+    path = temporary_beside(target, prefix, ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++) + suffix);
+    guard = register_temporary(path);
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd >= 0) return fd;
+    const int err = errno;
+    guard.reset();
+    path.clear();
+    if (err != EEXIST) {
+      errno = err;
+      return -1;
+    }
+  }
+}
 
 // Why the MP4 at `path` is not a complete file, or "" if it is: its top-level boxes must tile
 // the file exactly and include the movie header (moov) and the media data (mdat). ffmpeg exits
@@ -137,6 +176,11 @@ std::string format_fps(double fps) {
 
 }  // namespace
 
+void set_temporary_registrar(TemporaryRegistrar files, ChildRegistrar children) {
+  registrar() = std::move(files);
+  child_registrar() = std::move(children);
+}
+
 std::string find_on_path(const std::string& name) {
   if (name.find('/') != std::string::npos) {
     return access(name.c_str(), X_OK) == 0 ? name : "";
@@ -179,17 +223,16 @@ void check_output_writable(const std::string& path) {
   }
 
   // the only reliable test (root, read-only mounts, /proc) is to create a file there
-  std::string probe = (dir / ".idmpc-write-test-XXXXXX").string();
-  std::vector<char> name(probe.begin(), probe.end());
-  name.push_back('\0');
-  const int fd = mkstemp(name.data());
+  std::string probe;
+  std::shared_ptr<void> guard;
+  const int fd = create_temporary((dir / "idmpc-write-test").string(), ".", "", probe, guard);
   if (fd < 0) {
     const int err = errno;
     throw std::runtime_error(head + "directory '" + dir.string() + "' is not writable (" +
                              errno_text(err) + ")");
   }
   close(fd);
-  std::remove(name.data());
+  std::remove(probe.c_str());
 }
 
 VideoWriter::VideoWriter(const std::string& out_mp4, int width, int height, double fps)
@@ -229,30 +272,25 @@ VideoWriter::VideoWriter(const std::string& out_mp4, int width, int height, doub
   const fs::path out(target_path_);
   const fs::path dir = direct_ ? fs::temp_directory_path()
                                : (out.has_parent_path() ? out.parent_path() : fs::path("."));
-  std::string tmp = (dir / ("." + out.filename().string() + ".tmp-XXXXXX.mp4")).string();
-  std::vector<char> tmp_name(tmp.begin(), tmp.end());
-  tmp_name.push_back('\0');
-  const int tmp_fd = mkstemps(tmp_name.data(), 4);
+  const int tmp_fd =
+      create_temporary((dir / out.filename()).string(), ".", ".mp4", tmp_path_, tmp_guard_);
   if (tmp_fd < 0) {
     const int err = errno;
     throw std::runtime_error("cannot write video '" + out_mp4 + "': expected a writable "
                              "directory '" + dir.string() + "', got: " + errno_text(err));
   }
   close(tmp_fd);
-  tmp_path_ = tmp_name.data();
 
   // ffmpeg's stderr goes to a temporary log
-  std::string log = (fs::temp_directory_path() / "idmpc-ffmpeg-XXXXXX.log").string();
-  std::vector<char> log_name(log.begin(), log.end());
-  log_name.push_back('\0');
-  const int log_fd = mkostemps(log_name.data(), 4, O_CLOEXEC);
+  const int log_fd = create_temporary((fs::temp_directory_path() / "idmpc-ffmpeg").string(), "",
+                                      ".log", log_path_, log_guard_);
   if (log_fd < 0) {
     const int err = errno;
     std::remove(tmp_path_.c_str());
+    tmp_guard_.reset();
     throw std::runtime_error("cannot create a temporary log file for ffmpeg in '" +
                              fs::temp_directory_path().string() + "': " + errno_text(err));
   }
-  log_path_ = log_name.data();
 
   int fds[2];
   if (pipe2(fds, O_CLOEXEC) != 0) {
@@ -293,6 +331,11 @@ VideoWriter::VideoWriter(const std::string& out_mp4, int width, int height, doub
     throw std::runtime_error("cannot start '" + ffmpeg + "': " + errno_text(rc));
   }
   pipe_fd_ = fds[1];
+  try {
+    if (child_registrar()) child_guard_ = child_registrar()(pid_);
+  } catch (...) {
+    // unregistered: a signal leaves ffmpeg to end when its input closes
+  }
 }
 
 VideoWriter::~VideoWriter() {
@@ -336,10 +379,12 @@ void VideoWriter::finish() {
     copy_into_target();
     std::remove(tmp_path_.c_str());
     std::remove(log_path_.c_str());
+    tmp_guard_.reset();
+    log_guard_.reset();
     finished_ = true;
     return;
   }
-  // mkstemps made the file 0600: the video keeps the permissions (and, as root, the owner) of
+  // the temporary was made 0600: the video keeps the permissions (and, as root, the owner) of
   // the file it replaces, or gets those of a normally created file
   if (existing_mode_ >= 0) {
     if (::geteuid() == 0 && ::chown(tmp_path_.c_str(), existing_uid_, existing_gid_) != 0) {
@@ -357,7 +402,9 @@ void VideoWriter::finish() {
     throw std::runtime_error("cannot move the encoded video to '" + out_path_ +
                              "': " + errno_text(err));
   }
+  tmp_guard_.reset();
   std::remove(log_path_.c_str());
+  log_guard_.reset();
   finished_ = true;
 }
 
@@ -420,6 +467,7 @@ int VideoWriter::wait_for_ffmpeg() {
     }
   }
   pid_ = -1;
+  child_guard_.reset();
   return status;
 }
 
@@ -434,6 +482,8 @@ void VideoWriter::abandon() noexcept {
   }
   if (!tmp_path_.empty()) std::remove(tmp_path_.c_str());
   if (!log_path_.empty()) std::remove(log_path_.c_str());
+  tmp_guard_.reset();
+  log_guard_.reset();
   finished_ = true;
 }
 

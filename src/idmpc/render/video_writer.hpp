@@ -2,10 +2,22 @@
 /// @file video_writer.hpp
 /// @brief H.264 MP4 encoding by piping raw RGB frames into an ffmpeg child process.
 
+#include <functional>
+#include <memory>
 #include <string>
 #include <sys/types.h>
 
 namespace idmpc::render {
+
+/// @brief Told of each temporary file the renderer makes (the video beside its output, ffmpeg's
+/// log, a probe of a directory) before the file is created; returns a guard that is dropped once
+/// the file is gone or renamed. The command line registers them for removal when a signal ends
+/// the process. Unset (the default), nothing is told.
+using TemporaryRegistrar = std::function<std::shared_ptr<void>(const std::string& path)>;
+/// @brief Told of the ffmpeg process writing a temporary video once it is started; its guard is
+/// dropped once the process has been waited for (the command line kills it on a signal).
+using ChildRegistrar = std::function<std::shared_ptr<void>(pid_t pid)>;
+void set_temporary_registrar(TemporaryRegistrar files, ChildRegistrar children);
 
 /// @brief Full path of an executable named `name` on PATH, or "" when there is none.
 std::string find_on_path(const std::string& name);
@@ -18,7 +30,8 @@ void check_output_writable(const std::string& path);
 
 /// @brief Writes an MP4 (H.264, yuv420p) from raw RGB frames through `ffmpeg`.
 ///
-/// ffmpeg writes to a temporary file next to the output, which finish() renames onto the
+/// ffmpeg writes to a hidden temporary file next to the output (`.<name>.tmp.<pid>.<k>.mp4`;
+/// for a special file, in the temporary directory), which finish() renames onto the
 /// output once ffmpeg exits cleanly (a symbolic link is followed and stays a link; a replaced
 /// file keeps its permissions; a special file such as a character device or FIFO is never
 /// replaced: the finished video is copied into it); abandoning the writer (destruction without finish(), for
@@ -64,6 +77,7 @@ class VideoWriter {
   gid_t existing_gid_ = 0;
   std::string tmp_path_;
   std::string log_path_;
+  std::shared_ptr<void> tmp_guard_, log_guard_, child_guard_;  // registrations (set_temporary_registrar)
   int width_ = 0;
   int height_ = 0;
   int frames_ = 0;
