@@ -1,9 +1,12 @@
-// The debug-build checks of the dynamics entry points: sizes, and the call-order preconditions
-// (rnea_vjp after rnea; minv_apply, minv_apply_columns, aba_derivatives_after_aba after aba, at
-// the same point; ltdl_factor after M, ltdl_solve after ltdl_factor). Death tests, so they run only where the checks are compiled in
-// (IDMPC_DEBUG_CHECKS, i.e. without NDEBUG); skipped in Release builds.
+// The checks of the dynamics entry points. The call-order preconditions (rnea_vjp after rnea;
+// minv_apply, minv_apply_columns, aba_derivatives_after_aba after aba, at the same point;
+// ltdl_factor after M, ltdl_solve after ltdl_factor) are debug checks: death tests, run where the
+// checks are compiled in (IDMPC_DEBUG_CHECKS: the sanitizer build), skipped in Release. Sizes and
+// the parts a Data was made with are checked in every build: they throw.
 #include <gtest/gtest.h>
 
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "idmpc/dynamics/dynamics.hpp"
@@ -85,22 +88,38 @@ TEST_F(DebugChecksDeathTest, LtdlWithoutMassMatrixOrFactorAborts) {
   ltdl_factor(model_, fresh);                   // fine
 }
 
-TEST_F(DebugChecksDeathTest, WrongSizesAbort) {
+// sizes and the parts a Data was made with are checked in every build (std::invalid_argument)
+class ArgumentChecks : public DebugChecksDeathTest {
+ protected:
+  void SetUp() override {}
+};
+
+TEST_F(ArgumentChecks, WrongSizesThrowInEveryBuild) {
   const VecX<double> short_ = VecX<double>::Zero(2);
-  EXPECT_DEATH(rnea(model_, data_, short_, v_, a_), "rnea: q, v, a must have size model.n");
-  EXPECT_DEATH(aba(model_, data_, q_, v_, short_), "aba: q, v, tau must have size model.n");
-  EXPECT_DEATH(crba(model_, data_, short_), "crba: q must have size model.n");
-  EXPECT_DEATH(rnea_derivatives(model_, data_, q_, short_, a_), "rnea_derivatives: q, v, a");
+  auto throws = [](auto&& call, const std::string& message) {
+    try {
+      call();
+      ADD_FAILURE() << "expected std::invalid_argument: " << message;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+    }
+  };
+  throws([&] { rnea(model_, data_, short_, v_, a_); }, "rnea: q, v, a must have size model.n");
+  throws([&] { aba(model_, data_, q_, v_, short_); }, "aba: q, v, tau must have size model.n");
+  throws([&] { crba(model_, data_, short_); }, "crba: q must have size model.n");
+  throws([&] { rnea_derivatives(model_, data_, q_, short_, a_); }, "rnea_derivatives: q, v, a");
   rnea(model_, data_, q_, v_, a_);
-  EXPECT_DEATH(rnea_vjp(model_, data_, short_), "rnea_vjp: w must have size model.n");
+  throws([&] { rnea_vjp(model_, data_, short_); }, "rnea_vjp: w must have size model.n");
   aba(model_, data_, q_, v_, a_);
-  EXPECT_DEATH(minv_apply(model_, data_, short_), "minv_apply: x must have size model.n");
-  EXPECT_DEATH(minv_apply_columns(model_, data_, 4), "expected 0 <= m <= model.n");
+  throws([&] { minv_apply(model_, data_, short_); }, "minv_apply: x must have size model.n");
+  throws([&] { minv_apply_columns(model_, data_, 4); }, "expected 0 <= m <= model.n");
   crba(model_, data_, q_);
   ltdl_factor(model_, data_);
-  EXPECT_DEATH(ltdl_solve(model_, data_, short_), "ltdl_solve: x must have size model.n");
+  throws([&] { ltdl_solve(model_, data_, short_); }, "ltdl_solve: x must have size model.n");
   const Model other(std::vector<Link>(2), Vec3<double>::Zero());
-  EXPECT_DEATH(rnea(other, data_, short_, short_, short_), "data was made for a model of another size");
+  throws([&] { rnea(other, data_, short_, short_, short_); }, "data was made for a model of another size");
+  Data rnea_only(model_, DataParts::rnea());
+  throws([&] { aba(model_, rnea_only, q_, v_, a_); }, "aba: data was made without its rnea and aba parts");
 }
 
 }  // namespace

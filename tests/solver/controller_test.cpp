@@ -356,5 +356,20 @@ INSTANTIATE_TEST_SUITE_P(Controllers, DisturbanceObserver,
                            return to_string(info.param.formulation) + "_" + to_string(info.param.mode);
                          });
 
+// a measured state of the wrong size is refused in every build, before anything reads it
+TEST(Controller, RefusesAStateOfTheWrongSize) {
+  const test::Problem p = load_problem(kArm4);
+  const int n = p.model.n;
+  Controller controller(OcpProblem(p.model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n),
+                                   VecX<double>::Zero(n), 10),
+                        CgmresSettings{});
+  const VecX<double> x = VecX<double>::Zero(n), short_x = VecX<double>::Zero(n - 1);
+  EXPECT_THROW(controller.initialize(short_x, x), std::invalid_argument);
+  controller.initialize(x, x);
+  EXPECT_THROW(controller.update(0.001, x, short_x), std::invalid_argument);
+  EXPECT_THROW(controller.solver().update(0.001, short_x, x), std::invalid_argument);
+  EXPECT_TRUE(controller.update(0.001, x, x));
+}
+
 }  // namespace
 }  // namespace idmpc

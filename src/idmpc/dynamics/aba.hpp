@@ -14,9 +14,9 @@ namespace idmpc {
 template <typename S, typename Q, typename Vv, typename T>
 [[gnu::flatten]] const VecX<S>& aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                    const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<T>& tau) {
-  IDMPC_DEBUG_CHECK(data.n == model.n, "aba: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea() | DataParts::aba()), "aba: data was made without its rnea and aba parts");
-  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && tau.size() == model.n,
+  IDMPC_CHECK_ARGUMENT(data.n == model.n, "aba: data was made for a model of another size");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea() | DataParts::aba()), "aba: data was made without its rnea and aba parts");
+  IDMPC_CHECK_ARGUMENT(q.size() == model.n && v.size() == model.n && tau.size() == model.n,
                     "aba: q, v, tau must have size model.n");
   data.passes.aba(q, v);
   const int n = model.n;
@@ -75,8 +75,8 @@ template <typename S, typename Q, typename Vv, typename T>
 /// Precondition: data holds aba at q (checked in debug builds).
 template <typename S, typename Xx>
 [[gnu::flatten]] const VecX<S>& minv_apply(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && x.size() == model.n, "minv_apply: x must have size model.n");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::minv_apply()), "minv_apply: data was made without its minv_apply part");
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && x.size() == model.n, "minv_apply: x must have size model.n");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::minv_apply()), "minv_apply: data was made without its minv_apply part");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
                     "minv_apply needs aba(model, data, q, v, tau) first, and no other algorithm at "
                     "another q since");
@@ -113,9 +113,9 @@ template <typename S, typename Xx>
 /// sweeps of 6×m blocks, reusing the articulated inertias of the last aba(q, ·, ·) call.
 /// Precondition: data holds aba at q (checked in debug builds).
 template <typename S> void minv_apply_columns(const Model& model, DataTpl<S>& data, int m) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && m >= 0 && m <= model.n,
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && m >= 0 && m <= model.n,
                     "minv_apply_columns: expected 0 <= m <= model.n");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::minv_columns()),
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::minv_columns()),
                     "minv_apply_columns: data was made without its minv_columns part");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
                     "minv_apply_columns needs aba(model, data, q, v, tau) first, and no other "

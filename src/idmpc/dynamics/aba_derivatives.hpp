@@ -45,9 +45,9 @@ template <typename S> void negated_product(const MatX<S>& A, const MatX<S>& B, M
 template <typename S, typename Q, typename Vv>
 void aba_derivatives_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                                const Eigen::MatrixBase<Vv>& v) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n && v.size() == model.n,
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && q.size() == model.n && v.size() == model.n,
                     "aba_derivatives_after_aba: q, v must have size model.n");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea_derivatives() | DataParts::minv_matrix() |
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea_derivatives() | DataParts::minv_matrix() |
                                     DataParts::aba_derivatives()),
                     "aba_derivatives_after_aba: data was made without its derivative parts");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),

@@ -19,9 +19,9 @@ namespace idmpc {
 template <typename S, typename Q>
 [[gnu::flatten]] const MatX<S>& crba(const Model& model, DataTpl<S>& data,
                                      const Eigen::MatrixBase<Q>& q) {
-  IDMPC_DEBUG_CHECK(data.n == model.n, "crba: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea() | DataParts::crba()), "crba: data was made without its rnea and crba parts");
-  IDMPC_DEBUG_CHECK(q.size() == model.n, "crba: q must have size model.n");
+  IDMPC_CHECK_ARGUMENT(data.n == model.n, "crba: data was made for a model of another size");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea() | DataParts::crba()), "crba: data was made without its rnea and crba parts");
+  IDMPC_CHECK_ARGUMENT(q.size() == model.n, "crba: q must have size model.n");
   data.passes.kinematics(q);
   data.passes.mass_matrix();
   const int n = model.n;

@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "idmpc/model/debug_check.hpp"
+#include "idmpc/model/checks.hpp"
 #include "idmpc/model/frame.hpp"
 #include "idmpc/model/joint.hpp"
 
@@ -40,7 +40,7 @@ template <typename S> class FrameKinematics {
   /// ancestor's motion subspace in world coordinates, which jacobian() and
   /// add_jacobian_transpose_times() read: call compute first.
   template <typename Q> void compute(const Model& model, const Eigen::MatrixBase<Q>& q) {
-    IDMPC_DEBUG_CHECK(model.n == n_ && q.size() == n_, "FrameKinematics::compute: q must have size model.n");
+    IDMPC_CHECK_ARGUMENT(model.n == n_ && q.size() == n_, "FrameKinematics::compute: q must have size model.n");
     // world → link down the ancestor path, S_j in world coordinates (at the world origin)
     Transform<S> X0, X_up;
     for (std::size_t k = 0; k < path_.size(); ++k) {
@@ -66,7 +66,7 @@ template <typename S> class FrameKinematics {
   /// For ancestor j with world axis ω_j through o_j: [ω_j × (p − o_j); ω_j] if revolute, [ω_j; 0]
   /// if prismatic; both are S_j (world coordinates, at the origin) moved to the point p.
   void jacobian(Eigen::Ref<Jacobian> J) const {
-    IDMPC_DEBUG_CHECK(J.cols() == n_, "FrameKinematics::jacobian: J must have model.n columns");
+    IDMPC_CHECK_ARGUMENT(J.cols() == n_, "FrameKinematics::jacobian: J must have model.n columns");
     J.setZero();
     for (std::size_t k = 0; k < path_.size(); ++k) {
       const Vec6<S>& s = S_W_[k];
@@ -81,7 +81,7 @@ template <typename S> class FrameKinematics {
   /// g_j += ω_j·f_lin. The force f_lin at p with the couple f_ang is moved to the world origin
   /// once, F = [f_ang + p × f_lin; f_lin], and g_j += S_jᵀF.
   void add_jacobian_transpose_times(const Vec3<S>& f_lin, const Vec3<S>& f_ang, Eigen::Ref<VecX<S>> g) const {
-    IDMPC_DEBUG_CHECK(g.size() == n_, "FrameKinematics::add_jacobian_transpose_times: g must have size model.n");
+    IDMPC_CHECK_ARGUMENT(g.size() == n_, "FrameKinematics::add_jacobian_transpose_times: g must have size model.n");
     const Vec3<S> n0 = f_ang + cross3<S>(p_, f_lin);
     for (std::size_t k = 0; k < path_.size(); ++k) {
       const Vec6<S>& s = S_W_[k];

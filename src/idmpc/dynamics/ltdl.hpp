@@ -43,8 +43,8 @@ template <typename F> void for_ancestor_runs(const Model& model, bool chain, int
 /// k, unit diagonal implied) and data.Dl, data.Dlinv = 1/D; O(Σ depth²) multiply-adds.
 /// Precondition: data.M holds M(q), from crba or rnea_derivatives (checked in debug builds).
 template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
-  IDMPC_DEBUG_CHECK(data.n == model.n, "ltdl_factor: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::ltdl()), "ltdl_factor: data was made without its ltdl part");
+  IDMPC_CHECK_ARGUMENT(data.n == model.n, "ltdl_factor: data was made for a model of another size");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::ltdl()), "ltdl_factor: data was made without its ltdl part");
   IDMPC_DEBUG_CHECK(data.passes.holds_mass_matrix(),
                     "ltdl_factor needs data.M: call crba or rnea_derivatives first");
   const int n = model.n;
@@ -85,7 +85,7 @@ template <typename S> void ltdl_factor(const Model& model, DataTpl<S>& data) {
 /// (checked in debug builds); later passes of other algorithms do not touch the factor.
 template <typename S, typename Xx>
 const VecX<S>& ltdl_solve(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Xx>& x) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && x.size() == model.n, "ltdl_solve: x must have size model.n");
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && x.size() == model.n, "ltdl_solve: x must have size model.n");
   IDMPC_DEBUG_CHECK(data.passes.holds_ltdl(), "ltdl_solve needs ltdl_factor(model, data) first");
   const int n = model.n;
   const bool chain = model.run_start[n - 1] == 0;

@@ -83,9 +83,9 @@ template <typename S> void world_placements(const Model& model, DataTpl<S>& data
 /// the last aba(q, ·, ·) call. Returns data.Minv; also leaves the world placements data.oX and
 /// axes data.oS at q. Precondition: data holds aba at q (checked in debug builds).
 template <typename S> const MatX<S>& minv_matrix_after_aba(const Model& model, DataTpl<S>& data) {
-  IDMPC_DEBUG_CHECK(data.n == model.n,
+  IDMPC_CHECK_ARGUMENT(data.n == model.n,
                     "minv_matrix_after_aba: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::aba() | DataParts::rnea_derivatives() | DataParts::minv_matrix()),
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::aba() | DataParts::rnea_derivatives() | DataParts::minv_matrix()),
                     "minv_matrix_after_aba: data was made without its aba, rnea_derivatives and minv_matrix parts");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba(),
                     "minv_matrix_after_aba needs aba(model, data, q, v, tau) first, and no other "
@@ -103,8 +103,8 @@ template <typename S> const MatX<S>& minv_matrix_after_aba(const Model& model, D
 /// valid only if it was made at the same q).
 template <typename S, typename Q>
 [[gnu::flatten]] const MatX<S>& minv_matrix(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n, "minv_matrix: q must have size model.n");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea() | DataParts::rnea_derivatives() | DataParts::minv_matrix()),
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && q.size() == model.n, "minv_matrix: q must have size model.n");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea() | DataParts::rnea_derivatives() | DataParts::minv_matrix()),
                     "minv_matrix: data was made without its rnea, rnea_derivatives and minv_matrix parts");
   data.passes.kinematics(q);
   const int n = model.n;

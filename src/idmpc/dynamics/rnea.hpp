@@ -29,9 +29,9 @@ template <typename S, typename Q, typename Vv, typename Aa>
 template <typename S, typename Q, typename Vv, typename Aa>
 [[gnu::flatten]] const VecX<S>& rnea(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                     const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
-  IDMPC_DEBUG_CHECK(data.n == model.n, "rnea: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea()), "rnea: data was made without its rnea part");
-  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
+  IDMPC_CHECK_ARGUMENT(data.n == model.n, "rnea: data was made for a model of another size");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea()), "rnea: data was made without its rnea part");
+  IDMPC_CHECK_ARGUMENT(q.size() == model.n && v.size() == model.n && a.size() == model.n,
                     "rnea: q, v, a must have size model.n");
   data.passes.rnea(q);
   const Vec6<S> a0 = base_acceleration<S>(model);
@@ -66,12 +66,12 @@ template <typename S, typename Q, typename Vv, typename Aa>
 template <typename S, typename Q, typename Vv>
 [[gnu::flatten]] const VecX<S>& rnea_after_aba(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                               const Eigen::MatrixBase<Vv>& v) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && q.size() == model.n && v.size() == model.n,
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && q.size() == model.n && v.size() == model.n,
                     "rnea_after_aba: q, v must have size model.n");
   IDMPC_DEBUG_CHECK(data.passes.holds_aba_at(q, v),
                     "rnea_after_aba needs aba(model, data, q, v, tau) at this (q, v) first, and no "
                     "other algorithm at another q since");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea() | DataParts::aba()),
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea() | DataParts::aba()),
                     "rnea_after_aba: data was made without its rnea and aba parts");
   data.passes.rnea_after_aba();
   // body forces

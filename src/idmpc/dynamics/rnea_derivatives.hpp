@@ -41,10 +41,10 @@ namespace detail {
 template <bool kJointTransforms, typename S, typename Q, typename Vv, typename Aa>
 [[gnu::flatten]] void rnea_derivatives_impl(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<Q>& q,
                            const Eigen::MatrixBase<Vv>& v, const Eigen::MatrixBase<Aa>& a) {
-  IDMPC_DEBUG_CHECK(data.n == model.n, "rnea_derivatives: data was made for a model of another size");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea() | DataParts::rnea_derivatives()),
+  IDMPC_CHECK_ARGUMENT(data.n == model.n, "rnea_derivatives: data was made for a model of another size");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea() | DataParts::rnea_derivatives()),
                     "rnea_derivatives: data was made without its rnea and rnea_derivatives parts");
-  IDMPC_DEBUG_CHECK(q.size() == model.n && v.size() == model.n && a.size() == model.n,
+  IDMPC_CHECK_ARGUMENT(q.size() == model.n && v.size() == model.n && a.size() == model.n,
                     "rnea_derivatives: q, v, a must have size model.n");
   if constexpr (kJointTransforms) data.passes.kinematics(q);
   data.passes.mass_matrix();

@@ -22,8 +22,8 @@ namespace idmpc {
 /// and accelerations (aba) or recomputed the kinematics at another q.
 template <typename S, typename W>
 [[gnu::flatten]] void rnea_vjp(const Model& model, DataTpl<S>& data, const Eigen::MatrixBase<W>& w) {
-  IDMPC_DEBUG_CHECK(data.n == model.n && w.size() == model.n, "rnea_vjp: w must have size model.n");
-  IDMPC_DEBUG_CHECK(data.parts.has(DataParts::rnea_vjp()), "rnea_vjp: data was made without its rnea_vjp part");
+  IDMPC_CHECK_ARGUMENT(data.n == model.n && w.size() == model.n, "rnea_vjp: w must have size model.n");
+  IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea_vjp()), "rnea_vjp: data was made without its rnea_vjp part");
   IDMPC_DEBUG_CHECK(data.passes.holds_rnea(),
                     "rnea_vjp needs rnea(model, data, q, v, a) at the point of linearization "
                     "first, and no aba or algorithm at another q since");

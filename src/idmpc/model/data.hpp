@@ -7,7 +7,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "idmpc/model/debug_check.hpp"
+#include "idmpc/model/checks.hpp"
 #include "idmpc/model/model.hpp"
 
 namespace idmpc {

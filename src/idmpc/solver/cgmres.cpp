@@ -9,6 +9,7 @@
 #include <Eigen/LU>
 
 #include "idmpc/dynamics/finite_difference.hpp"
+#include "idmpc/model/checks.hpp"
 
 namespace idmpc {
 namespace {
@@ -107,6 +108,7 @@ void Cgmres::set_trajectory(const ShootingTrajectory& X) {
 
 double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
                           const Eigen::Ref<const VecX<double>>& v) {
+  IDMPC_CHECK_ARGUMENT(q.size() == ocp_.n() && v.size() == ocp_.n(), "Cgmres::initialize: q and v must have size n");
   const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
   const double T = horizon_.length(t);
   const bool full = settings_.init_full_horizon && T > 0;
@@ -276,6 +278,7 @@ bool Cgmres::newton_step(double t, const Eigen::Ref<const VecX<double>>& q,
 
 bool Cgmres::step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
                   bool frozen) {
+  IDMPC_CHECK_ARGUMENT(q.size() == ocp_.n() && v.size() == ocp_.n(), "Cgmres::update: q and v must have size n");
   using clock = std::chrono::steady_clock;
   const auto start = timing_ ? clock::now() : clock::time_point{};
   if (timing_) ocp_.reset_times();

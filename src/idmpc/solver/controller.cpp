@@ -7,6 +7,7 @@
 #include <string>
 
 #include "idmpc/dynamics/rnea.hpp"
+#include "idmpc/model/checks.hpp"
 
 namespace idmpc {
 
@@ -157,6 +158,7 @@ void Controller::observe(In q, In v) {
 }
 
 const VecX<double>& Controller::initialize(In q, In v) {
+  IDMPC_CHECK_ARGUMENT(q.size() == n() && v.size() == n(), "Controller::initialize: q and v must have size n");
   failure_.clear();
   have_previous_ = false;
   d_hat_.setZero();
@@ -183,6 +185,7 @@ const VecX<double>& Controller::initialize(In q, In v) {
 }
 
 bool Controller::update(double t, In q, In v) {
+  IDMPC_CHECK_ARGUMENT(q.size() == n() && v.size() == n(), "Controller::update: q and v must have size n");
   failure_.clear();
   observe(q, v);
   if (!solver_.update(t, q, v)) {
