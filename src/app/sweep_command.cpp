@@ -20,6 +20,7 @@
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
 #include "app/data_dir_option.hpp"
+#include "app/number_options.hpp"
 #include "app/swingup.hpp"
 #include "idmpc/experiment/data_dir.hpp"
 #include "idmpc/experiment/input_file.hpp"
@@ -867,6 +868,7 @@ void register_sweep(CLI::App& app) {
   sub->add_flag("!--no-simd-stages", opt->simd_stages,
                 "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "
                 "the paper's arithmetic");
+  require_decimal_numbers(*sub);
   sub->callback([opt, duration, tables, arms_tasks] {
     opt->duration_given = duration->count() > 0;
     if (arms_tasks->count() > 0 && tables->count() == 0) opt->tables = kArmsTable;
