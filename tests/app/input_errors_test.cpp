@@ -147,18 +147,14 @@ TEST_F(InputErrors, HorizonBeyondItsLimitIsRefusedBeforeAllocating) {
 // numeric options: decimal only
 
 TEST_F(InputErrors, NumericOptionsRefuseEmptyAndNonDecimalText) {
+  // the trial's cases, each form once (every numeric option has the same check)
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"swingup --N 010", "--N"},          {"swingup --N 0x10", "--N"},     {"swingup --kmax 0b1", "--kmax"},
-      {"swingup --N 0o7", "--N"},          {"swingup --N ''", "--N"},       {"swingup --N 1e3", "--N"},
-      {"swingup --alpha ''", "--alpha"},   {"swingup --zeta ''", "--zeta"}, {"swingup --qref ''", "--qref"},
-      {"swingup --Qq ''", "--Qq"},         {"swingup --Qv ''", "--Qv"},     {"swingup --Qa ''", "--Qa"},
-      {"swingup --Tf 0x1p3", "--Tf"},      {"swingup --dt 010", "--dt"},    {"swingup --qref 0 ''", "--qref"},
-      {"swingup --R nan", "--R"},          {"check " + quote(kArm4) + " --seed ''", "--seed"},
-      {"check " + quote(kArm4) + " --samples 010", "--samples"},
-      {"check " + quote(kArm4) + " --seed -1", "--seed"},
+      {"swingup --N 010", "--N"},        {"swingup --kmax 0x10", "--kmax"}, {"swingup --N 0b1", "--N"},
+      {"swingup --alpha ''", "--alpha"}, {"swingup --zeta ''", "--zeta"},   {"swingup --qref 0 ''", "--qref"},
+      {"swingup --Qq ''", "--Qq"},       {"swingup --Tf 0x1p3", "--Tf"},    {"swingup --R nan", "--R"},
+      {"check " + quote(kArm4) + " --seed ''", "--seed"},
       {"sweep --duration '' --out out", "--duration"},
-      {"render " + quote(kArm4) + " --log x.csv --out x.mp4 --width 0640", "--width"},
-      {"render " + quote(kArm4) + " --log x.csv --out x.mp4 --fps ''", "--fps"}};
+      {"render " + quote(kArm4) + " --log x.csv --out x.mp4 --width 0640", "--width"}};
   for (const auto& [args, option] : cases) {
     SCOPED_TRACE(args);
     // a swing-up that would run is kept short
