@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "app/commands.hpp"
+#include "app/number_options.hpp"
 #include "idmpc/mujoco/check.hpp"
 #include "idmpc/mujoco/load.hpp"
 
@@ -111,6 +112,7 @@ void register_check(CLI::App& app) {
                 "ignore the model's actuators and apply joint torques directly");
   sub->add_flag("--actuate-every-joint", opt->actuate_every_joint,
                 "let direct torques drive the joints the model has no actuator for (under-actuated models)");
+  require_decimal_numbers(*sub);
   sub->callback([opt] { run(*opt); });
 }
 

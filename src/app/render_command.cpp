@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "app/commands.hpp"
+#include "app/number_options.hpp"
 #include "app/output_paths.hpp"
 
 #ifdef IDMPC_HAVE_RENDER
@@ -119,6 +120,7 @@ void register_render(CLI::App& app) {
                   "auto | fixed:<model camera> | azimuth,elevation,distance (deg, deg, m)")
       ->capture_default_str();
   sub->add_flag("--no-overlay", args->no_overlay, "no text table and |u| plot over the scene");
+  require_decimal_numbers(*sub);
   sub->callback([args] { run_render(*args); });
 }
 

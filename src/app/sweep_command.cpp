@@ -22,9 +22,11 @@
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
 #include "app/data_dir_option.hpp"
+#include "app/number_options.hpp"
 #include "app/output_paths.hpp"
 #include "app/swingup.hpp"
 #include "idmpc/experiment/data_dir.hpp"
+#include "idmpc/experiment/input_file.hpp"
 #include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc::app {
@@ -158,22 +160,26 @@ std::vector<std::string> arm_tasks(const SweepOptions& opt) {
   const std::string path = arms_list(opt);
   const std::string what = opt.arms_tasks.empty() ? " (the list of real-arm tasks; see --models and --arms-tasks)"
                                                   : " (--arms-tasks)";
-  std::ifstream in(path);
-  if (!in || std::filesystem::is_directory(path)) throw std::invalid_argument("'" + path + "' cannot be read" + what);
+  nlohmann::json list;
+  try {
+    list = read_json_file(path, "task list");
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(e.what() + what);
+  }
   std::vector<std::string> tasks;
   try {
-    tasks = nlohmann::json::parse(in).at("tasks").get<std::vector<std::string>>();
+    tasks = list.at("tasks").get<std::vector<std::string>>();
   } catch (const nlohmann::json::exception& e) {
     throw std::invalid_argument("'" + path + "': expected {\"tasks\": [task files]}" + what + ", " + e.what());
   }
   if (tasks.empty()) throw std::invalid_argument("'" + path + "' lists no task" + what);
   for (size_t k = 0; k < tasks.size(); ++k) {
     if (tasks[k].empty() || tasks[k].find_first_of(",\r\n") != std::string::npos) {
-      throw std::invalid_argument("'" + path + "' lists the task file name '" + tasks[k] +
+      throw std::invalid_argument("'" + path + "' lists the task file name '" + abbreviate(tasks[k]) +
                                   "', empty or with a comma or line break (it names a CSV row)" + what);
     }
     if (std::find(tasks.begin(), tasks.begin() + k, tasks[k]) != tasks.begin() + k) {
-      throw std::invalid_argument("'" + path + "' lists '" + tasks[k] + "' twice" + what);
+      throw std::invalid_argument("'" + path + "' lists '" + abbreviate(tasks[k]) + "' twice" + what);
     }
   }
   return tasks;
@@ -914,6 +920,7 @@ void register_sweep(CLI::App& app) {
   sub->add_flag("!--no-simd-stages", opt->simd_stages,
                 "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "
                 "the paper's arithmetic");
+  require_decimal_numbers(*sub);
   sub->callback([opt, duration, tables, arms_tasks] {
     opt->duration_given = duration->count() > 0;
     if (arms_tasks->count() > 0 && tables->count() == 0) opt->tables = kArmsTable;

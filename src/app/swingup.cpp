@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "app/atomic_file.hpp"
+#include "app/number_options.hpp"
 #include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc::app {
@@ -83,6 +84,7 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
                    "evaluate the horizon stages one by one instead of in SIMD lanes (ID; FD matrix; FD "
                    "adjoint under multiple shooting): the paper's arithmetic"),
       [](const Task& s, Task& d) { d.simd_stages = s.simd_stages; });
+  require_decimal_numbers(sub);
 }
 
 Task make_task(const TaskOverrides& o) {

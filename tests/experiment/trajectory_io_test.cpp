@@ -149,10 +149,9 @@ TEST(ReadTrajectoryCsv, RejectsEachMalformedFileWithOneLine) {
 TEST(ReadTrajectoryCsv, RejectsAnUnreadableFile) {
   TempDir dir;
   const std::string missing = dir.path() + "/missing.csv";
-  EXPECT_EQ(error_of([&] { read_trajectory_csv(missing, 1); }),
-            "trajectory file '" + missing + "' cannot be read (missing or not readable)");
+  EXPECT_EQ(error_of([&] { read_trajectory_csv(missing, 1); }), "trajectory file '" + missing + "': does not exist");
   EXPECT_EQ(error_of([&] { read_trajectory_csv(dir.path(), 1); }),
-            "trajectory file '" + dir.path() + "' cannot be read (missing or not readable)");
+            "trajectory file '" + dir.path() + "': is a directory, expected a CSV file");
 }
 
 // --- JSON ---

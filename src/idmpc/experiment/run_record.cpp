@@ -8,11 +8,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
 
 #include <nlohmann/json.hpp>
+
+#include "idmpc/experiment/input_file.hpp"
 
 namespace idmpc {
 namespace {
@@ -145,14 +148,9 @@ bool RunLog::finite_pose(std::size_t i) const {
 }
 
 RunLog read_run_log(const std::string& csv_path) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (!fs::exists(csv_path, ec)) {
-    throw std::runtime_error("run log '" + csv_path + "' does not exist");
-  }
-  if (fs::is_directory(csv_path, ec)) {
-    throw std::runtime_error("run log '" + csv_path + "': expected a CSV file, got a directory");
-  }
+  // a regular file (a run log is as long as its run: its size is not bounded)
+  const std::string problem = input_file_problem(csv_path, "a CSV file", std::numeric_limits<std::uintmax_t>::max());
+  if (!problem.empty()) throw std::runtime_error("run log '" + csv_path + "': " + problem);
   std::ifstream in(csv_path);
   if (!in) throw std::runtime_error("cannot open run log '" + csv_path + "'");
 
@@ -169,9 +167,8 @@ RunLog read_run_log(const std::string& csv_path) {
   const std::vector<std::string> header = split(line);
   Layout layout;
   if (!parse_header(header, layout)) {
-    const std::string shown = line.size() > 200 ? line.substr(0, 200) + "..." : line;
     throw std::runtime_error(where + " line 1: bad header: expected " + kHeaderShape +
-                             ", got '" + shown + "'");
+                             ", got '" + abbreviate(line, 200) + "'");
   }
   log.n = layout.n;
   log.nu = layout.nu;
@@ -195,17 +192,17 @@ RunLog read_run_log(const std::string& csv_path) {
     for (std::size_t c = 0; c < columns; ++c) {
       if (!parse_number(cells[c], values[c])) {
         throw std::runtime_error(where + " line " + std::to_string(line_no) + ", column '" +
-                                 header[c] + "': expected a number, got '" + cells[c] + "'");
+                                 abbreviate(header[c]) + "': expected a number, got '" + abbreviate(cells[c]) + "'");
       }
     }
     const double time = values[0];
     if (!std::isfinite(time)) {
       throw std::runtime_error(where + " line " + std::to_string(line_no) +
-                               ": expected a finite time, got '" + cells[0] + "'");
+                               ": expected a finite time, got '" + abbreviate(cells[0]) + "'");
     }
     if (!log.t.empty() && time < log.t.back()) {
       throw std::runtime_error(where + " line " + std::to_string(line_no) +
-                               ": expected non-decreasing times, got " + cells[0] +
+                               ": expected non-decreasing times, got " + abbreviate(cells[0]) +
                                " after " + std::to_string(log.t.back()));
     }
     log.t.push_back(time);
@@ -450,15 +447,7 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
 }
 
 RunSummary read_summary(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error("cannot open run summary '" + path + "'");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error("run summary '" + path + "': expected JSON, got a parse error: " + e.what());
-  }
-  return summary_from_json(j, path);
+  return summary_from_json(read_json_file(path, "run summary"), path);
 }
 
 }  // namespace idmpc

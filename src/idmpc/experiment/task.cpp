@@ -1,11 +1,12 @@
 #include "idmpc/experiment/task.hpp"
 
 #include "idmpc/experiment/data_dir.hpp"
+#include "idmpc/experiment/input_file.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <set>
 #include <sstream>
@@ -23,16 +24,6 @@ std::string text(double x) {
   return o.str();
 }
 
-json parse_file(const std::string& path, const char* what) {
-  std::ifstream in(path);
-  if (!in) throw std::invalid_argument(std::string(what) + " '" + path + "' cannot be read (missing or not readable)");
-  try {
-    return json::parse(in);
-  } catch (const json::exception& e) {
-    throw std::invalid_argument(std::string(what) + " '" + path + "': expected JSON, got a parse error: " + e.what());
-  }
-}
-
 // typed access naming file and field
 struct Reader {
   const json& j;
@@ -40,22 +31,31 @@ struct Reader {
 
   void known(const std::set<std::string>& keys) const {
     for (const auto& item : j.items()) {
-      if (!keys.count(item.key())) throw std::invalid_argument(where + ": unknown field '" + item.key() + "'");
+      if (!keys.count(item.key())) throw std::invalid_argument(where + ": unknown field '" + abbreviate(item.key()) + "'");
     }
   }
   bool has(const char* key) const { return j.contains(key); }
   [[noreturn]] void bad(const char* key, const char* expected) const {
-    throw std::invalid_argument(where + ": field '" + key + "': expected " + expected + ", got " + j.at(key).dump());
+    throw std::invalid_argument(where + ": field '" + key + "': expected " + expected + ", got " +
+                                abbreviate(j.at(key).dump()));
   }
   void get(const char* key, double& x) const {
     if (!has(key)) return;
     if (!j.at(key).is_number()) bad(key, "a number");
     x = j.at(key).get<double>();
   }
+  // the JSON integer itself, never wrapped to int (4294967321 is not 25)
   void get(const char* key, int& x) const {
     if (!has(key)) return;
-    if (!j.at(key).is_number_integer()) bad(key, "an integer");
-    x = j.at(key).get<int>();
+    const json& v = j.at(key);
+    constexpr auto lowest = std::numeric_limits<int>::min(), highest = std::numeric_limits<int>::max();
+    const char* expected = "an integer from -2147483648 to 2147483647";
+    if (!v.is_number_integer()) bad(key, "an integer");
+    if (v.is_number_unsigned() ? v.get<std::uint64_t>() > static_cast<std::uint64_t>(highest)
+                               : v.get<std::int64_t>() < lowest || v.get<std::int64_t>() > highest) {
+      bad(key, expected);
+    }
+    x = static_cast<int>(v.get<std::int64_t>());
   }
   void get(const char* key, bool& x) const {
     if (!has(key)) return;
@@ -136,7 +136,7 @@ std::string paper_task_path() { return shipped_mjcf_path("paper_swingup.json"); 
 std::string paper_tables_path() { return shipped_mjcf_path("paper_tables.json"); }
 
 Task load_task(const std::string& path, const Task* base) {
-  Task t = task_from_json(parse_file(path, "task file"), "task file '" + path + "'", base ? *base : arm_defaults());
+  Task t = task_from_json(read_json_file(path, "task file"), "task file '" + path + "'", base ? *base : arm_defaults());
   t.source = path;
   if (!t.model.empty()) t.model = resolve_path(t.model, path);
   return t;
@@ -153,6 +153,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
+  if (t.model.size() > kMaxPathChars) r.bad("model", "a file name of at most 4096 characters");
   if (r.has("q0")) {
     if (j.at("q0").is_string()) {
       r.get("q0", t.q0_rule);
@@ -323,8 +324,20 @@ nlohmann::json to_json(const Task& t) {
 }
 
 ResolvedTask resolve(const Task& t, int n) {
+  // the parsers of these words echo an unknown one in full: a long one is refused here, shortened
+  const std::pair<const std::string&, const char*> words[] = {{t.formulation, "--formulation (formulation)"},
+                                                              {t.derivatives, "--derivatives (derivatives)"},
+                                                              {t.shooting, "--shooting (cgmres.shooting)"},
+                                                              {t.implicit_damping, "--implicit-damping (implicit_damping)"}};
+  for (const auto& [word, name] : words) {
+    if (word.size() > kMaxShownChars) throw std::invalid_argument(std::string(name) + ": unknown value '" + abbreviate(word) + "'");
+  }
   ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}};
-  if (t.N < 1) throw std::invalid_argument("N must be at least 1, got " + std::to_string(t.N));
+  // bounded before anything is sized from it
+  if (t.N < 1 || t.N > kMaxHorizonSteps) {
+    throw std::invalid_argument("--N (cgmres.N) must be from 1 to " + std::to_string(kMaxHorizonSteps) +
+                                " horizon steps, got " + std::to_string(t.N));
+  }
   if (!(t.duration > 0) || !std::isfinite(t.duration)) {
     throw std::invalid_argument("duration must be positive, got " + std::to_string(t.duration));
   }
@@ -471,7 +484,7 @@ const PaperCell* PaperTables::find(const std::string& table, const std::string& 
 }
 
 PaperTables load_paper_tables(const std::string& path) {
-  const json j = parse_file(path, "tables file");
+  const json j = read_json_file(path, "tables file");
   const Reader r{j, "tables file '" + path + "'"};
   r.known({"schema", "source", "machine", "task", "marks", "cells"});
   PaperTables t;

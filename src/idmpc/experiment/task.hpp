@@ -121,6 +121,11 @@ const Task& arm_defaults();
 
 nlohmann::json to_json(const Task& task);
 
+/// @brief The largest horizon (N) a task may ask for: far above any useful setting (the paper's
+/// largest is 50), and small enough that the controller's stage workspace, sized from it, fits
+/// in memory (kmax is bounded where the GMRES basis is sized: Gmres::checked).
+inline constexpr int kMaxHorizonSteps = 10000;
+
 /// @brief A task made concrete for a model with n joints: validated vectors and settings.
 struct ResolvedTask {
   Formulation formulation;
@@ -133,7 +138,7 @@ struct ResolvedTask {
   std::vector<std::string> warnings;  ///< settings accepted but without effect (e.g. Q_a in FD)
 };
 /// @brief Throws std::invalid_argument naming the field (a scalar or n values expected,
-/// non-negative weights, finite values, valid C/GMRES settings).
+/// non-negative weights, finite values, valid C/GMRES settings, N within kMaxHorizonSteps).
 ResolvedTask resolve(const Task& task, int n);
 
 /// @brief Whether the task weights no acceleration (every Q_a is 0): the case the paper's

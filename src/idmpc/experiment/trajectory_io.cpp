@@ -1,9 +1,10 @@
 #include "idmpc/experiment/trajectory_io.hpp"
 
+#include "idmpc/experiment/input_file.hpp"
+
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -62,7 +63,8 @@ struct Fields {
   const std::string& where;
 
   [[noreturn]] void bad(const char* key, const std::string& expected) const {
-    throw std::invalid_argument(where + ": field '" + key + "': expected " + expected + ", got " + j.at(key).dump());
+    throw std::invalid_argument(where + ": field '" + key + "': expected " + expected + ", got " +
+                                abbreviate(j.at(key).dump()));
   }
   [[noreturn]] void missing(const char* key, const std::string& expected) const {
     throw std::invalid_argument(where + ": missing field '" + key + "' (" + expected + ")");
@@ -72,7 +74,7 @@ struct Fields {
       if (keys.count(item.key())) continue;
       std::string list;
       for (const std::string& k : keys) list += (list.empty() ? "" : ", ") + k;
-      throw std::invalid_argument(where + ": unknown field '" + item.key() + "' for shape \"" + shape +
+      throw std::invalid_argument(where + ": unknown field '" + abbreviate(item.key()) + "' for shape \"" + shape +
                                   "\" (expected " + list + ")");
     }
   }
@@ -175,7 +177,8 @@ std::unique_ptr<Trajectory> waypoints(const Fields& f, const VecX<double>& start
   for (std::size_t i = 0; i < points.size(); ++i) {
     const std::string where = f.where + ", 'points'[" + std::to_string(i) + "]";
     if (!points[i].is_object()) {
-      throw std::invalid_argument(where + ": expected {\"t\": seconds, \"value\": [...]}, got " + points[i].dump());
+      throw std::invalid_argument(where + ": expected {\"t\": seconds, \"value\": [...]}, got " +
+                                  abbreviate(points[i].dump()));
     }
     const Fields p{points[i], where};
     p.known({"t", "value"}, "waypoints");
@@ -201,7 +204,10 @@ std::unique_ptr<Trajectory> csv(const Fields& f, const VecX<double>& start, cons
   f.known({"shape", "file"}, "csv");
   const char* expected = "a CSV file name, relative to the task file";
   if (!f.j.contains("file")) f.missing("file", expected);
-  if (!f.j.at("file").is_string() || f.j.at("file").get<std::string>().empty()) f.bad("file", expected);
+  if (!f.j.at("file").is_string() || f.j.at("file").get<std::string>().empty() ||
+      f.j.at("file").get<std::string>().size() > kMaxPathChars) {
+    f.bad("file", expected);
+  }
   const std::filesystem::path file(f.j.at("file").get<std::string>());
   const std::string path =
       file.is_absolute() ? file.string() : (std::filesystem::path(base_dir) / file).lexically_normal().string();
@@ -217,10 +223,7 @@ std::unique_ptr<Trajectory> csv(const Fields& f, const VecX<double>& start, cons
 SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
   const std::string file = "trajectory file '" + path + "'";
   if (dim < 1) throw std::invalid_argument(file + ": expected a dimension >= 1, got " + std::to_string(dim));
-  std::ifstream in(path);
-  if (!in || std::filesystem::is_directory(path)) {
-    throw std::invalid_argument(file + " cannot be read (missing or not readable)");
-  }
+  std::istringstream in(read_input_file(path, "trajectory file", "a CSV file"));
   const std::size_t columns = static_cast<std::size_t>(dim) + 1;
   const std::string expected_columns = std::to_string(columns) + " columns (time and " + std::to_string(dim) +
                                        (dim == 1 ? " value)" : " values)");
@@ -250,7 +253,7 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
     if (header) continue;
     for (std::size_t c = 0; c < columns; ++c) {
       const std::string field = at + ", column " + std::to_string(c + 1) + ": expected ";
-      const std::string got = ", got '" + std::string(fields[c]) + "'";
+      const std::string got = ", got '" + abbreviate(fields[c]) + "'";
       switch (parse_number(fields[c], x)) {
         case Parsed::kNotANumber: throw std::invalid_argument(field + "a number" + got);
         case Parsed::kOutOfRange: throw std::invalid_argument(field + "a number in double range" + got);
@@ -269,7 +272,6 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
     }
     previous_line = number;
   }
-  if (in.bad()) throw std::invalid_argument(file + " cannot be read (read error)");
   if (t.size() < 2) {
     throw std::invalid_argument(file + ": expected at least 2 rows of samples, got " + std::to_string(t.size()));
   }
@@ -283,7 +285,7 @@ std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::strin
   if (!start.allFinite()) throw std::invalid_argument(where + ": the reference's start value is not finite");
   if (!j.is_object()) {
     throw std::invalid_argument(where + ": expected an object {\"shape\": \"circle\" | \"line\" | \"waypoints\" | "
-                                        "\"csv\", ...}, got " + j.dump());
+                                        "\"csv\", ...}, got " + abbreviate(j.dump()));
   }
   const Fields f{j, where};
   const char* shapes = "\"circle\", \"line\", \"waypoints\" or \"csv\"";

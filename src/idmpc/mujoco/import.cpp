@@ -59,7 +59,9 @@ std::string joint_label(const mjModel* m, int j) {
          object_name(m, mjOBJ_BODY, m->jnt_bodyid[j]) + "'";
 }
 
-// every number the import reads must be finite: MuJoCo's compiler lets e.g. axis="nan 1 0" pass
+// every number of the model the import, the horizon or the plant's torque limits use must be
+// finite: MuJoCo's compiler lets e.g. axis="nan 1 0", mass="nan" or ctrlrange="nan 1" pass (its
+// range checks, lower < upper, compare with NaN, which is never true)
 void require_finite(const mjModel* m, const std::string& source) {
   auto require = [&](bool ok, const std::string& owner, const char* what, const mjtNum* x, int count) {
     if (!ok) {
@@ -72,6 +74,7 @@ void require_finite(const mjModel* m, const std::string& source) {
     require(finite(m->jnt_axis + 3 * j, 3), owner, "axis", m->jnt_axis + 3 * j, 3);
     require(finite(m->jnt_pos + 3 * j, 3), owner, "position", m->jnt_pos + 3 * j, 3);
     require(finite(m->jnt_stiffness + j, 1), owner, "stiffness", m->jnt_stiffness + j, 1);
+    require(finite(m->jnt_range + 2 * j, 2), owner, "range", m->jnt_range + 2 * j, 2);
     const int a = m->jnt_qposadr[j];
     require(finite(m->qpos0 + a, 1), owner, "reference position", m->qpos0 + a, 1);
     require(finite(m->qpos_spring + a, 1), owner, "spring reference", m->qpos_spring + a, 1);
@@ -80,17 +83,29 @@ void require_finite(const mjModel* m, const std::string& source) {
     const std::string owner = joint_label(m, m->dof_jntid[i]);
     require(finite(m->dof_armature + i, 1), owner, "armature", m->dof_armature + i, 1);
     require(finite(m->dof_damping + i, 1), owner, "damping", m->dof_damping + i, 1);
+    require(finite(m->dof_frictionloss + i, 1), owner, "frictionloss", m->dof_frictionloss + i, 1);
   }
   for (int b = 1; b < m->nbody; ++b) {
     const std::string owner = "body '" + object_name(m, mjOBJ_BODY, b) + "'";
     require(finite(m->body_pos + 3 * b, 3), owner, "position", m->body_pos + 3 * b, 3);
     require(finite(m->body_quat + 4 * b, 4), owner, "orientation", m->body_quat + 4 * b, 4);
-    require(finite(m->body_mass + b, 1), owner, "mass", m->body_mass + b, 1);
+    require(finite(m->body_mass + b, 1), owner, "mass (mass, or a geom's density or mass)", m->body_mass + b, 1);
     require(finite(m->body_ipos + 3 * b, 3), owner, "centre of mass", m->body_ipos + 3 * b, 3);
     require(finite(m->body_iquat + 4 * b, 4), owner, "inertia frame", m->body_iquat + 4 * b, 4);
     require(finite(m->body_inertia + 3 * b, 3), owner, "inertia", m->body_inertia + 3 * b, 3);
   }
+  for (int u = 0; u < m->nu; ++u) {
+    const std::string owner = "actuator '" + object_name(m, mjOBJ_ACTUATOR, u) + "'";
+    require(finite(m->actuator_ctrlrange + 2 * u, 2), owner, "ctrlrange", m->actuator_ctrlrange + 2 * u, 2);
+    require(finite(m->actuator_forcerange + 2 * u, 2), owner, "forcerange", m->actuator_forcerange + 2 * u, 2);
+    require(finite(m->actuator_gear + 6 * u, 6), owner, "gear", m->actuator_gear + 6 * u, 6);
+    require(finite(m->actuator_gainprm + mjNGAIN * u, mjNGAIN), owner, "gainprm", m->actuator_gainprm + mjNGAIN * u,
+            mjNGAIN);
+    require(finite(m->actuator_biasprm + mjNBIAS * u, mjNBIAS), owner, "biasprm", m->actuator_biasprm + mjNBIAS * u,
+            mjNBIAS);
+  }
   require(finite(m->opt.gravity, 3), "the model", "gravity", m->opt.gravity, 3);
+  require(finite(&m->opt.timestep, 1), "the model", "timestep", &m->opt.timestep, 1);
 }
 
 // hinge and slide joints only, each one dof
@@ -256,7 +271,13 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
     for (int j = 0; j < m->njnt; ++j) {
       if (static_cast<std::size_t>(j) < options.joint_force_lower.size() &&
           static_cast<std::size_t>(j) < options.joint_force_upper.size()) {
-        bound(m->jnt_dofadr[j], options.joint_force_lower[j], options.joint_force_upper[j]);
+        // ±infinity where the file declares none
+        const double lo = options.joint_force_lower[j], hi = options.joint_force_upper[j];
+        if (!(lo <= hi)) {
+          throw std::invalid_argument(joint_label(m, j) + " in '" + source + "' has actuatorfrcrange (" + number(lo) +
+                                      " " + number(hi) + "): expected numbers, lower <= upper");
+        }
+        bound(m->jnt_dofadr[j], lo, hi);
       }
     }
     for (int i = 0; i < m->nv; ++i) {
@@ -517,7 +538,12 @@ VecX<double> keyframe_qpos(const mjModel* m, const std::string& name, const std:
     throw std::invalid_argument("model '" + source + "' has no keyframe '" + name +
                                 "' (q0 \"" + name + "\" needs one; give q0 as joint values instead)");
   }
-  return Eigen::Map<const VecX<double>>(m->key_qpos + static_cast<size_t>(k) * m->nq, m->nq);
+  const VecX<double> q = Eigen::Map<const VecX<double>>(m->key_qpos + static_cast<size_t>(k) * m->nq, m->nq);
+  if (!q.allFinite()) {
+    throw std::invalid_argument("keyframe '" + name + "' in '" + source + "' has a non-finite qpos (" +
+                                numbers(q.data(), static_cast<int>(q.size())) + "): expected finite numbers");
+  }
+  return q;
 }
 
 std::vector<std::string> range_violations(const mjModel* m, const VecX<double>& q, const std::string& what) {

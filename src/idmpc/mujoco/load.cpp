@@ -1,6 +1,7 @@
 #include "idmpc/mujoco/load.hpp"
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -11,9 +12,11 @@
 #include <mutex>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <stdexcept>
 #include <unistd.h>
 
+#include "idmpc/experiment/input_file.hpp"
 #include "idmpc/mujoco/mjcf_scan.hpp"
 #include "idmpc/mujoco/mjcf_translate.hpp"
 
@@ -76,6 +79,36 @@ void check_render_asset_sizes(const std::vector<MjcfElement>& elements, const st
     long w = 0, h = 0;
     if (a.kind == "texture" && png_size(a.resolved, w, h) && too_big(w, h)) {
       refuse(*a.element, "texture file '" + a.resolved + "'", w, h);
+    }
+  }
+}
+
+// attributes (MJCF and URDF) holding the numbers of the model's physics: MuJoCo 2.2 compiles NaN
+// or infinity in them, or quietly drops it (a geom's mass="nan" is taken as unset, and the
+// density's mass used instead)
+const std::set<std::string> kPhysicalAttributes = {
+    "mass", "density", "pos", "quat", "axisangle", "euler", "xyaxes", "zaxis", "fromto", "size", "diaginertia",
+    "fullinertia", "axis", "range", "ctrlrange", "forcerange", "actuatorfrcrange", "frictionloss", "damping",
+    "armature", "stiffness", "springref", "ref", "gear", "gainprm", "biasprm", "kp", "kv", "timestep", "gravity",
+    "settotalmass", "friction", "qpos",
+    // URDF
+    "xyz", "rpy", "value", "effort", "lower", "upper", "velocity", "ixx", "ixy", "ixz", "iyy", "iyz", "izz"};
+
+void check_finite_numbers(const std::vector<MjcfElement>& elements, const std::string& path) {
+  for (const MjcfElement& e : elements) {
+    for (const auto& [key, value] : e.attributes) {
+      if (!kPhysicalAttributes.count(key)) continue;
+      std::istringstream tokens(value);
+      for (std::string token; tokens >> token;) {
+        char* end = nullptr;
+        const double x = std::strtod(token.c_str(), &end);
+        // a number MuJoCo reads as NaN or infinity (an overflow such as 1e999 included)
+        if (end == token.c_str() + token.size() && !std::isfinite(x)) {
+          throw std::runtime_error("model '" + path + "': <" + e.name + "> '" + abbreviate(e.get("name", "(unnamed)")) +
+                                   "' (" + e.file + " line " + std::to_string(e.line) + ") has " + key + "=\"" +
+                                   abbreviate(value) + "\": expected finite numbers");
+        }
+      }
     }
   }
 }
@@ -146,12 +179,13 @@ std::string LoadedModel::notice() const {
 
 LoadedModel load_model_translated(const std::string& path) {
   install_error_handlers();
-  if (!std::filesystem::exists(path)) {
-    throw std::runtime_error("model file '" + path + "' does not exist");
-  }
+  // a regular file MuJoCo can read whole: a directory, FIFO or device is refused before any read
+  const std::string problem = input_file_problem(path, "an MJCF or URDF file");
+  if (!problem.empty()) throw std::runtime_error("model '" + path + "': " + problem);
   // render-only assets MuJoCo would allocate in full: bounded before it sees them
   const std::vector<MjcfElement> elements = scan_mjcf(path);
   check_render_asset_sizes(elements, path);
+  check_finite_numbers(elements, path);
   const MjcfTranslation translation = translate_mjcf(path);
   std::vector<std::string> untranslatable = translation.untranslatable;
   auto refuse_untranslatable = [&] {

@@ -39,11 +39,17 @@ struct LoadedModel {
 };
 
 /// @brief Loads an MJCF or URDF file; throws std::runtime_error naming the file and the problem
-/// in one line if the file is missing or malformed: an attribute, value or element of a newer
+/// in one line if the file is missing, unreadable, no regular file (a directory, FIFO or
+/// device: refused before it is opened for reading), larger than 64 MiB, includes itself or a
+/// file twice, or is malformed: an attribute, value or element of a newer
 /// MuJoCo than this build's (mj_versionString()), a missing mesh or texture file (named as MuJoCo
 /// looks for it), or MuJoCo's own message.
 ///
-/// Before MuJoCo parses the file, it and its includes are scanned for images MuJoCo would
+/// Before MuJoCo parses the file, it and its includes are scanned for NaN or infinity in an
+/// attribute of the physics (mass, density, inertia, pos, range, ctrlrange, damping, gear, …):
+/// MuJoCo 2.2 compiles those or quietly ignores them (a geom's mass="nan" becomes the density's
+/// mass); such a model is refused naming the element, its line and the attribute. They are also
+/// scanned for images MuJoCo would
 /// allocate in full: a builtin or PNG texture, or a height field, of more than 8192 x 8192 pixels
 /// is refused (such a model would take gigabytes or crash MuJoCo 2.2 inside mj_loadXML).
 ///

@@ -1,10 +1,15 @@
 #include "idmpc/mujoco/mjcf_scan.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
+#include <stdexcept>
+
+#include "idmpc/experiment/input_file.hpp"
 
 namespace idmpc::mj {
 namespace {
@@ -17,22 +22,60 @@ bool name_char(char c) {
   return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == ':' || c == '.';
 }
 
-bool read_text(const std::string& path, std::string& text) {
+// an MJCF file's text; a file that cannot be an input file (a directory, a FIFO or a device, too
+// large, missing or unreadable) is refused before it is read, naming `what`
+std::string read_text(const std::string& path, const std::string& what) {
+  const std::string problem = input_file_problem(path, "an MJCF file");
+  if (!problem.empty()) throw std::runtime_error(what + ": " + problem);
   std::ifstream in(path, std::ios::binary);
-  if (!in) return false;
   std::ostringstream ss;
   ss << in.rdbuf();
-  text = ss.str();
-  return true;
+  return ss.str();
 }
 
-void scan_into(const std::string& path, const fs::path& base, int depth, std::vector<MjcfElement>& out) {
-  std::string text;
-  if (depth > kMaxIncludeDepth || !read_text(path, text)) return;
+// the file identity of a path, so that two spellings of one file are one file
+std::string identity(const std::string& path) {
+  std::error_code ec;
+  const fs::path p = fs::weakly_canonical(path, ec);
+  return ec ? fs::path(path).lexically_normal().string() : p.string();
+}
+
+// the files on the way from the model to the one being scanned, and every file scanned so far:
+// MuJoCo includes each file once, and a cycle would otherwise be followed 16 levels deep
+struct IncludeScan {
+  std::string model;
+  std::vector<std::string> chain;  // identities, the model first
+  std::vector<std::string> names;  // as written, for messages
+  std::set<std::string> seen;
+};
+
+void scan_into(const std::string& path, const std::string& what, const fs::path& base, IncludeScan& scan,
+               std::vector<MjcfElement>& out) {
+  if (scan.chain.size() > static_cast<std::size_t>(kMaxIncludeDepth)) return;
+  const std::string text = read_text(path, what);
   for (MjcfElement& e : scan_elements(text, path)) {
     if (e.name == "include" && !e.get("file").empty()) {
       const fs::path file(e.get("file"));
-      scan_into((file.is_absolute() ? file : base / file).string(), base, depth + 1, out);
+      const std::string included = (file.is_absolute() ? file : base / file).string();
+      const std::string at = "<include> '" + abbreviate(e.get("file")) + "' (" + e.file + " line " +
+                             std::to_string(e.line) + ")";
+      const std::string id = identity(included);
+      const auto cycle = std::find(scan.chain.begin(), scan.chain.end(), id);
+      if (cycle != scan.chain.end()) {
+        std::string loop;
+        for (auto k = cycle; k != scan.chain.end(); ++k) loop += scan.names[k - scan.chain.begin()] + " -> ";
+        throw std::runtime_error("model '" + scan.model + "': " + at + " is an include cycle (" + loop + included +
+                                 ")");
+      }
+      if (!scan.seen.insert(id).second) {
+        throw std::runtime_error("model '" + scan.model + "': " + at + " includes '" + included +
+                                 "' a second time: MuJoCo includes each file once");
+      }
+      scan.chain.push_back(id);
+      scan.names.push_back(included);
+      scan_into(included, "model '" + scan.model + "': " + at, base, scan, out);
+      scan.chain.pop_back();
+      scan.names.pop_back();
     } else {
       out.push_back(std::move(e));
     }
@@ -123,7 +166,8 @@ std::vector<MjcfElement> scan_elements(const std::string& text, const std::strin
 
 std::vector<MjcfElement> scan_mjcf(const std::string& path) {
   std::vector<MjcfElement> out;
-  scan_into(path, fs::path(path).parent_path(), 0, out);
+  IncludeScan scan{path, {identity(path)}, {path}, {identity(path)}};
+  scan_into(path, "model '" + path + "'", fs::path(path).parent_path(), scan, out);
   return out;
 }
 

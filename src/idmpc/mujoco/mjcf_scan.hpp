@@ -24,8 +24,11 @@ struct MjcfElement {
 std::vector<MjcfElement> scan_elements(const std::string& text, const std::string& file);
 
 /// @brief Elements of the file at `path` and, in place of each `<include file="…"/>`, those of
-/// the included file (resolved against the directory of `path`, up to 16 levels deep; an
-/// unreadable include is skipped and left to MuJoCo to report).
+/// the included file (resolved against the directory of `path`, up to 16 levels deep). Throws
+/// std::runtime_error, one line naming the model and the include, for an include cycle, a file
+/// included twice (MuJoCo includes each file once), and a file that is no input file
+/// (input_file.hpp: missing, unreadable, a directory, FIFO or device, over 64 MiB) — before
+/// reading it.
 std::vector<MjcfElement> scan_mjcf(const std::string& path);
 
 /// @brief An asset file an MJCF names: mesh, skin, height field or texture file.
