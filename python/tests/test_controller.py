@@ -218,7 +218,7 @@ def test_bad_settings_are_value_errors():
     ("Qq", [-1.0], "--Qq (weights.Qq) must be finite and non-negative, got -1.000000"),
     ("duration", -1.0, "duration must be positive, got -1.000000"),
     ("formulation", "pd", "unknown formulation 'pd': expected 'fd' or 'id'"),
-    ("N", 0, "N must be at least 1, got 0"),
+    ("N", 0, "--N (cgmres.N) must be from 1 to 10000 horizon steps, got 0"),
     ("dt", 0.0, "sampling period dt must be positive, got 0"),
 ])
 def test_bad_task_values_are_value_errors_with_the_cpp_message(field, value, message):

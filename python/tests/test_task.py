@@ -113,7 +113,7 @@ def test_missing_task_file_is_a_value_error(tmp_path):
     path = tmp_path / "none.json"
     with pytest.raises(ValueError) as e:
         idmpc.load_task(str(path))
-    assert str(e.value) == f"task file '{path}' cannot be read (missing or not readable)"
+    assert str(e.value) == f"task file '{path}': does not exist"
 
 
 def test_bad_task_file_names_file_and_field(tmp_path):
