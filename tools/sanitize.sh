@@ -13,7 +13,11 @@
 # 0.74 s -> 30 s; UBSan is most of it: AddressSanitizer alone 5.4 s), so cgmres_test takes
 # about 10 min and cli_test about 12 min; hence a per-test timeout of an hour.
 #
+# Debug checks are on (IDMPC_DEBUG_CHECKS=1: the call-order preconditions and their death tests).
+#
 #   tools/sanitize.sh            # build and run everything
+#   tools/sanitize.sh --subset   # the subset CI runs (label `sanitize`, tests/CMakeLists.txt):
+#                                # builds only its executables and idmpc
 #   tools/sanitize.sh -R Cli     # extra arguments go to ctest
 #   IDMPC_SANITIZE_TARGETS="idmpc cli_test" tools/sanitize.sh -R Cli
 #                                # build only these targets (the executables the selected tests run)
@@ -26,20 +30,33 @@ logs=$build/sanitizer-logs
 
 "$here/tools/setup.sh" clang
 flags="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all"
-opt="-O1 -gline-tables-only -DNDEBUG"
+opt="-O1 -gline-tables-only -DNDEBUG -DIDMPC_DEBUG_CHECKS=1"
+subset=0
+if [ "${1:-}" = "--subset" ]; then
+  subset=1
+  shift
+fi
 cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_C_FLAGS_RELWITHDEBINFO="$opt" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$opt" \
   -DCMAKE_C_FLAGS="$flags" -DCMAKE_CXX_FLAGS="$flags" \
   -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" \
   -DIDMPC_WERROR=ON -DIDMPC_BUILD_BENCH=OFF -DIDMPC_TEST_TIMEOUT=3600 \
-  -DIDMPC_BUILD_PYTHON=OFF ${IDMPC_CMAKE_ARGS:-} >/dev/null
+  -DIDMPC_BUILD_PYTHON=OFF -DIDMPC_SANITIZE_SUBSET=ON ${IDMPC_CMAKE_ARGS:-} >/dev/null
 # (the Python module is left out: an instrumented module needs the sanitizer runtime preloaded
 # into the interpreter)
-if [ -n "${IDMPC_SANITIZE_TARGETS:-}" ]; then
+if [ "$subset" = 1 ]; then
+  # the subset's executables (a ctest is named <executable> or <executable>/<shard>) and idmpc
+  targets=$(cd "$build" && ctest -N -L sanitize | sed -n 's|^ *Test *#[0-9]*: \([a-z_]*_test\).*|\1|p' | sort -u)
+  # shellcheck disable=SC2086  # a list of target names
+  cmake --build "$build" -j "$jobs" --target idmpc $targets
+  set -- -L sanitize "$@"
+elif [ -n "${IDMPC_SANITIZE_TARGETS:-}" ]; then
   # shellcheck disable=SC2086  # a list of target names
   cmake --build "$build" -j "$jobs" --target ${IDMPC_SANITIZE_TARGETS}
+  set -- -LE partial "$@"
 else
+  set -- -LE partial "$@"
   cmake --build "$build" -j "$jobs"
 fi
 
