@@ -20,11 +20,13 @@
 
 #include "support/command.hpp"
 #include "support/sanitizers.hpp"
+#include "support/test_models.hpp"
 
 namespace idmpc {
 namespace {
 
 namespace fs = std::filesystem;
+using test::arm2_mjcf;
 using test::quote;
 
 const std::string kBinary = std::getenv("IDMPC_TEST_BINARY") ? std::getenv("IDMPC_TEST_BINARY") : IDMPC_BINARY;
@@ -37,33 +39,6 @@ const std::string kLimits = "timeout -s KILL 20 ";
 #else
 const std::string kLimits = "ulimit -v 3000000; timeout -s KILL 20 ";
 #endif
-
-// a two-joint arm driven by motors with declared torque ranges; `attribute` goes on the
-// element named `element` ("joint0", "motor0", "link0" or "geom0")
-std::string arm(const std::string& element = "", const std::string& attribute = "") {
-  auto at = [&](const std::string& name) { return name == element ? " " + attribute : std::string(); };
-  return R"(<mujoco model="arm2">
-  <option timestep="0.001"/>
-  <default><geom contype="0" conaffinity="0"/></default>
-  <worldbody>
-    <body name="link0" pos="0 0 1")" + at("link0") + R"(>
-      <joint name="joint0" type="hinge" axis="0 1 0")" + at("joint0") + R"(/>
-      <geom name="geom0" type="box" pos="0 0 0.25" size="0.05 0.05 0.25")" + (element == "geom0" ? "" : R"( mass="1")") +
-         at("geom0") + R"(/>
-      <body name="link1" pos="0 0 0.5">
-        <joint name="joint1" type="hinge" axis="0 1 0"/>
-        <geom type="box" pos="0 0 0.25" size="0.05 0.05 0.25" mass="1"/>
-      </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor name="motor0" joint="joint0" ctrllimited="true")" +
-         (attribute.find("ctrlrange") == std::string::npos ? R"( ctrlrange="-20 20")" : "") + at("motor0") + R"(/>
-    <motor name="motor1" joint="joint1" ctrllimited="true" ctrlrange="-20 20"/>
-  </actuator>
-</mujoco>
-)";
-}
 
 class InputErrors : public ::testing::Test {
  protected:
@@ -196,7 +171,7 @@ TEST_F(InputErrors, DeviceFilesAreRefusedBeforeReading) {
   expect_one_line(idmpc("swingup --task /dev/zero"), {"task file '/dev/zero'", device});
   write("zero_model.json", R"({"model": "/dev/zero"})");
   expect_one_line(idmpc("swingup --task zero_model.json"), {"model '/dev/zero'", device});
-  write("arm.xml", arm());
+  write("arm.xml", arm2_mjcf());
   write("zero_reference.json", R"({"model": "arm.xml", "q0": [0, 0], "qref": [0, 0],
                                   "reference": {"shape": "csv", "file": "/dev/zero"}})");
   expect_one_line(idmpc("swingup --task zero_reference.json"), {"trajectory file '/dev/zero'", device});
@@ -222,7 +197,7 @@ TEST_F(InputErrors, DirectoryModelSaysSo) {
 }
 
 TEST_F(InputErrors, UnreadableModelSaysPermissionDenied) {
-  write("locked.xml", arm());
+  write("locked.xml", arm2_mjcf());
   fs::permissions(dir_ / "locked.xml", fs::perms::none);
   // root reads any file: as root the command runs as nobody (setpriv, util-linux)
   std::string as_user;
@@ -239,10 +214,10 @@ TEST_F(InputErrors, UnreadableModelSaysPermissionDenied) {
 // models with NaN: refused by swingup too, not only warned about by check
 
 TEST_F(InputErrors, SwingupRefusesANonFiniteTorqueRange) {
-  write("nan_ctrl.xml", arm("motor0", R"(ctrlrange="nan 1")"));
+  write("nan_ctrl.xml", arm2_mjcf("motor0", R"(ctrlrange="nan 1")"));
   expect_one_line(idmpc("swingup nan_ctrl.xml --q0 0 0 --qref 1 1 --duration 0.05"),
                   {"<motor> 'motor0'", "ctrlrange=\"nan 1\"", "nan_ctrl.xml"});
-  write("nan_mass.xml", arm("geom0", R"(mass="nan")"));
+  write("nan_mass.xml", arm2_mjcf("geom0", R"(mass="nan")"));
   expect_one_line(idmpc("swingup nan_mass.xml --q0 0 0 --qref 1 1 --duration 0.05"),
                   {"<geom> 'geom0'", "mass=\"nan\"", "nan_mass.xml"});
 }

@@ -16,11 +16,13 @@
 #include "idmpc/experiment/run_record.hpp"
 #include "idmpc/experiment/task.hpp"
 #include "idmpc/experiment/trajectory_io.hpp"
+#include "support/errors.hpp"
 
 namespace idmpc {
 namespace {
 
 namespace fs = std::filesystem;
+using test::error_of;
 
 class InputFileTest : public ::testing::Test {
  protected:
@@ -36,15 +38,6 @@ class InputFileTest : public ::testing::Test {
   }
   fs::path dir_;
 };
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "no exception";
-}
 
 TEST(Abbreviate, KeepsShortTextAndShortensLongText) {
   EXPECT_EQ(abbreviate("[1, 2]"), "[1, 2]");

@@ -21,45 +21,15 @@
 
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "support/errors.hpp"
+#include "support/test_models.hpp"
 
 namespace idmpc {
 namespace {
 
 namespace fs = std::filesystem;
-
-// a two-joint arm with motors; `attribute` goes on the element named `element`
-std::string arm(const std::string& element, const std::string& attribute, const std::string& extra = "") {
-  auto at = [&](const std::string& name) { return name == element ? " " + attribute : std::string(); };
-  return R"(<mujoco model="arm2">
-  <default><geom contype="0" conaffinity="0"/></default>
-  <worldbody>
-    <body name="link0" pos="0 0 1")" + at("link0") + R"(>
-      <joint name="joint0" type="hinge" axis="0 1 0")" + at("joint0") + R"(/>
-      <geom name="geom0" type="box" pos="0 0 0.25" size="0.05 0.05 0.25")" + (element == "geom0" ? "" : R"( mass="1")") +
-         at("geom0") + R"(/>
-      <body name="link1" pos="0 0 0.5">)" + (element == "inertial1" ? "<inertial " + attribute + "/>" : "") + R"(
-        <joint name="joint1" type="hinge" axis="0 1 0"/>
-        <geom type="box" pos="0 0 0.25" size="0.05 0.05 0.25" mass="1"/>
-      </body>
-    </body>
-  </worldbody>
-  <actuator>
-    <motor name="motor0" joint="joint0" ctrllimited="true")" +
-         (attribute.find("ctrlrange") == std::string::npos ? R"( ctrlrange="-20 20")" : "") + at("motor0") + R"(/>
-    <motor name="motor1" joint="joint1" ctrllimited="true" ctrlrange="-20 20"/>
-  </actuator>)" + extra + R"(
-</mujoco>
-)";
-}
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "no exception";
-}
+using test::arm2_mjcf;
+using test::error_of;
 
 class ModelValues : public ::testing::Test {
  protected:
@@ -87,7 +57,7 @@ class ModelValues : public ::testing::Test {
   fs::path dir_;
 };
 
-TEST_F(ModelValues, ArmLoadsAsWritten) { EXPECT_EQ(import_error(arm("", "")), "no exception"); }
+TEST_F(ModelValues, ArmLoadsAsWritten) { EXPECT_EQ(import_error(arm2_mjcf("", "")), "no exception"); }
 
 TEST_F(ModelValues, NonFiniteNumbersInTheFileAreRefusedNamingElementLineAndAttribute) {
   struct Case {
@@ -114,7 +84,7 @@ TEST_F(ModelValues, NonFiniteNumbersInTheFileAreRefusedNamingElementLineAndAttri
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.element + " " + c.attribute);
-    const std::string message = import_error(arm(c.element, c.attribute));
+    const std::string message = import_error(arm2_mjcf(c.element, c.attribute));
     EXPECT_NE(message.find("model '" + (dir_ / "model.xml").string() + "': " + c.tag), std::string::npos) << message;
     EXPECT_NE(message.find(" line " + std::to_string(c.line) + ")"), std::string::npos) << message;
     EXPECT_NE(message.find(": expected finite numbers"), std::string::npos) << message;
@@ -125,7 +95,7 @@ TEST_F(ModelValues, NonFiniteNumbersInTheFileAreRefusedNamingElementLineAndAttri
 // a model changed after compiling (or a compiled value MuJoCo computed): the importer checks the
 // numbers it uses too
 TEST_F(ModelValues, NonFiniteNumbersInTheCompiledModelAreRefusedNamingElementAndField) {
-  const std::string path = write("model.xml", arm("", ""));
+  const std::string path = write("model.xml", arm2_mjcf("", ""));
   const mj::ModelPtr m = mj::load_model(path);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   struct Case {
@@ -165,9 +135,9 @@ TEST_F(ModelValues, NonFiniteNumbersInTheCompiledModelAreRefusedNamingElementAnd
 
 TEST_F(ModelValues, NonFiniteKeyframeIsRefused) {
   const std::string keyframe = R"(<keyframe><key name="home" qpos="nan 0"/></keyframe>)";
-  EXPECT_NE(import_error(arm("", "", keyframe)).find("<key> 'home'"), std::string::npos);
+  EXPECT_NE(import_error(arm2_mjcf("", "", keyframe)).find("<key> 'home'"), std::string::npos);
   // in a compiled model: when the task starts from it
-  const std::string path = write("key.xml", arm("", "", R"(<keyframe><key name="home" qpos="0 0"/></keyframe>)"));
+  const std::string path = write("key.xml", arm2_mjcf("", "", R"(<keyframe><key name="home" qpos="0 0"/></keyframe>)"));
   const mj::ModelPtr m = mj::load_model(path);
   m->key_qpos[1] = std::numeric_limits<double>::infinity();
   const std::string message = error_of([&] { mj::keyframe_qpos(m.get(), "home", path); });

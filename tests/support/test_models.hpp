@@ -12,4 +12,10 @@ namespace idmpc::test {
 /// @throws std::runtime_error if the directory is missing or holds no model.
 std::vector<std::string> shipped_model_paths();
 
+/// @brief A two-joint arm (two boxes, motors with declared ctrlrange) as MJCF text, for tests of
+/// bad model values: `attribute` (e.g. `ctrlrange="nan 1"`) goes on the element named `element`
+/// ("link0", "joint0", "geom0", "motor0"; "inertial1" adds an `<inertial>` to link1 with it),
+/// `extra` before `</mujoco>` (e.g. a keyframe).
+std::string arm2_mjcf(const std::string& element = "", const std::string& attribute = "", const std::string& extra = "");
+
 }  // namespace idmpc::test
