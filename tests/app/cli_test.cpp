@@ -1244,12 +1244,8 @@ TEST_P(CliInterrupted, DynamicsLeavesNoTemporary) {
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   const std::string cmd = "cd " + quote(dir_.string()) + " && ulimit -c 0 && exec " + quote(kBinary) + " dynamics " +
                           quote(kArm4) + " --in in.fifo --out out.csv 2> .stderr";
-  const pid_t pid = ::fork();
+  const pid_t pid = test::start_command(cmd);
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   // open the FIFO once the command reads it, feed one row, wait for the temporary output
   using clock = std::chrono::steady_clock;
   const auto deadline = clock::now() + std::chrono::seconds(20);
@@ -1613,12 +1609,8 @@ TEST_F(Cli, ACommandWhoseOutputCannotBeWrittenFails) {
 TEST_F(Cli, SwingupVideoInterruptedLeavesNoTemporary) {
   const std::string cmd = "cd " + quote(dir_.string()) + " && exec " + quote(kBinary) + " swingup " + quote(kArm4) +
                           " --duration 0.5 --video v.mp4 > .stdout 2> .stderr";
-  const pid_t pid = ::fork();
+  const pid_t pid = test::start_command(cmd);
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   // wait until ffmpeg has begun the video: its temporary beside v.mp4 has bytes
   using clock = std::chrono::steady_clock;
   const auto deadline = clock::now() + std::chrono::seconds(20);

@@ -1,6 +1,7 @@
 #include "support/command.hpp"
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -29,6 +30,15 @@ CommandResult run_command(const std::string& command, const std::filesystem::pat
   std::filesystem::remove(out);
   std::filesystem::remove(err);
   return r;
+}
+
+pid_t start_command(const std::string& command) {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  return pid;
 }
 
 }  // namespace idmpc::test

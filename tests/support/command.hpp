@@ -2,6 +2,8 @@
 /// @file command.hpp
 /// @brief Running a command line in a test: its exit code and captured output.
 
+#include <sys/types.h>
+
 #include <filesystem>
 #include <string>
 
@@ -21,5 +23,9 @@ std::string slurp(const std::filesystem::path& p);
 /// @brief Runs the shell command `command` in directory `dir`, stdout and stderr captured
 /// through the files dir/.stdout and dir/.stderr, removed afterwards.
 CommandResult run_command(const std::string& command, const std::filesystem::path& dir);
+
+/// @brief Starts the shell command `command` in the background (`/bin/sh -c`) and returns its
+/// process id, for a test that signals or waits for it; -1 if fork failed.
+pid_t start_command(const std::string& command);
 
 }  // namespace idmpc::test
