@@ -66,21 +66,21 @@ TEST_F(ModelValues, NonFiniteNumbersInTheFileAreRefusedNamingElementLineAndAttri
   };
   // MuJoCo compiles each of these, or (mass="nan") silently takes the density's mass instead
   const std::vector<Case> cases = {
-      {"motor0", R"(ctrlrange="nan 1")", "<motor> 'motor0'", 14},
-      {"motor0", R"(ctrlrange="-1 inf")", "<motor> 'motor0'", 14},
-      {"motor0", R"(forcelimited="true" forcerange="-5 nan")", "<motor> 'motor0'", 14},
-      {"motor0", R"(gear="nan")", "<motor> 'motor0'", 14},
-      {"motor0", R"(gear="1e999")", "<motor> 'motor0'", 14},
-      {"joint0", R"(limited="true" range="nan 1")", "<joint> 'joint0'", 5},
-      {"joint0", R"(frictionloss="nan")", "<joint> 'joint0'", 5},
-      {"joint0", R"(damping="NaN")", "<joint> 'joint0'", 5},
-      {"joint0", R"(armature="inf")", "<joint> 'joint0'", 5},
-      {"joint0", R"(stiffness="-Infinity")", "<joint> 'joint0'", 5},
-      {"geom0", R"(mass="nan")", "<geom> 'geom0'", 6},
-      {"geom0", R"(density="nan")", "<geom> 'geom0'", 6},
-      {"inertial1", R"(pos="nan 0 0" mass="1" diaginertia="0.1 0.1 0.1")", "<inertial> '(unnamed)'", 7},
-      {"inertial1", R"(pos="0 0 0" mass="nan" diaginertia="0.1 0.1 0.1")", "<inertial> '(unnamed)'", 7},
-      {"inertial1", R"(pos="0 0 0" mass="1" diaginertia="nan 0.1 0.1")", "<inertial> '(unnamed)'", 7},
+      {"motor0", R"(ctrlrange="nan 1")", "<motor> 'motor0'", 15},
+      {"motor0", R"(ctrlrange="-1 inf")", "<motor> 'motor0'", 15},
+      {"motor0", R"(forcelimited="true" forcerange="-5 nan")", "<motor> 'motor0'", 15},
+      {"motor0", R"(gear="nan")", "<motor> 'motor0'", 15},
+      {"motor0", R"(gear="1e999")", "<motor> 'motor0'", 15},
+      {"joint0", R"(limited="true" range="nan 1")", "<joint> 'joint0'", 6},
+      {"joint0", R"(frictionloss="nan")", "<joint> 'joint0'", 6},
+      {"joint0", R"(damping="NaN")", "<joint> 'joint0'", 6},
+      {"joint0", R"(armature="inf")", "<joint> 'joint0'", 6},
+      {"joint0", R"(stiffness="-Infinity")", "<joint> 'joint0'", 6},
+      {"geom0", R"(mass="nan")", "<geom> 'geom0'", 7},
+      {"geom0", R"(density="nan")", "<geom> 'geom0'", 7},
+      {"inertial1", R"(pos="nan 0 0" mass="1" diaginertia="0.1 0.1 0.1")", "<inertial> '(unnamed)'", 8},
+      {"inertial1", R"(pos="0 0 0" mass="nan" diaginertia="0.1 0.1 0.1")", "<inertial> '(unnamed)'", 8},
+      {"inertial1", R"(pos="0 0 0" mass="1" diaginertia="nan 0.1 0.1")", "<inertial> '(unnamed)'", 8},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.element + " " + c.attribute);
