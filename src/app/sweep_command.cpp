@@ -82,10 +82,9 @@ std::string model_files_hash(const std::string& model) {
   return text_hash(hashes);
 }
 
-// the hash of the task as the cell runs it and of the model files it runs on (their contents),
-// so that a resumed sweep never mixes settings or models
-std::string settings_hash(Task task, const std::string& model) {
-  const std::string files = model_files_hash(task.model);
+// the hash of the task as the cell runs it and of the model files it runs on (`files`:
+// model_files_hash), so that a resumed sweep never mixes settings or models
+std::string settings_hash(Task task, const std::string& model, const std::string& files) {
   task.model = model;  // as named in the grid, not where --models happens to put it
   task.source.clear();
   return text_hash(to_json(task).dump() + "\n" + files);
@@ -211,7 +210,13 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
 // the grid, each cell keyed by the settings it runs with
 std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables, const Task& base) {
   std::vector<Cell> cells = grid_of(opt, tables, base);
-  for (Cell& c : cells) c.settings = settings_hash(cell_task(base, c, opt), c.model);
+  std::map<std::string, std::string> files;  // model_files_hash per model file, read once
+  for (Cell& c : cells) {
+    const Task task = cell_task(base, c, opt);
+    auto it = files.find(task.model);
+    if (it == files.end()) it = files.emplace(task.model, model_files_hash(task.model)).first;
+    c.settings = settings_hash(task, c.model, it->second);
+  }
   return cells;
 }
 
