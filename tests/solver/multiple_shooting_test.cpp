@@ -264,15 +264,21 @@ TEST_P(MultipleShooting, TheCondensedDirectionSolvesTheUncondensedSystem) {
 // the same U; under multiple shooting the defects vanish too. Undamped Newton needs a close
 // start, FD the closer: a 1 % kick of FD's torques gives ‖F‖ ≈ 360, from which even a dense
 // Newton diverges, and with limits a 10 % kick of (d, ρ) lands ID on the mirrored KKT point
-// d < 0, ρ < 0 (under both schemes alike). Measured on the way: multiple shooting's first step
+// d < 0, ρ < 0 (under both schemes alike). With exact products (DESIGN §11) both schemes reach the
+// same solution as with differences. Measured on the way: multiple shooting's first step
 // takes FD from ‖F‖ = 22 to 1e-3, single shooting's to 0.09; for ID the two are alike.
 TEST_P(MultipleShooting, BothSchemesConvergeToTheSameSolution) {
   const int N = 10;
   const double kR = 1e-2;
   const VecX<double> q = (VecX<double>(4) << -0.2, 0.1, 0.05, -0.05).finished(), v = VecX<double>::Zero(4);
-  VecX<double> solution[2];
+  VecX<double> solution[2][2];
+  const auto& [formulation, mode, limited] = GetParam();
+  // exact products in adjoint mode (the matrix mode's dual path: exact_products_test)
+  const int products_run = mode == DerivativeMode::kAdjoint ? 2 : 1;
+  for (int p = 0; p < products_run; ++p)
   for (const ShootingScheme scheme : {ShootingScheme::kSingle, ShootingScheme::kMultiple}) {
-    SCOPED_TRACE(to_string(scheme));
+    const Products products = p == 0 ? Products::kDifference : Products::kExact;
+    SCOPED_TRACE(to_string(scheme) + " " + to_string(products));
     Shooting ocp = make(N, kR);
     Shooting probe = make(N, kR);
     CgmresSettings s;
@@ -280,11 +286,11 @@ TEST_P(MultipleShooting, BothSchemesConvergeToTheSameSolution) {
     s.init_full_horizon = true;
     s.kmax = ocp.dim();
     s.shooting = scheme;
+    s.products = products;
     Cgmres solver(ocp, s);
     solver.initialize(0.0, q, v);  // ‖F‖ 1e-10 (ID) … 2e-2 (FD with limits): a start, no more
     const VecX<double> optimum = solver.solution();
     std::mt19937 rng(5);
-    const auto& [formulation, mode, limited] = GetParam();
     const double kick = formulation == Formulation::kForwardDynamics ? 1e-3 : 0.05;
     const int n = 4, m = ocp.problem().m(), sd = ocp.stage_dim();
     VecX<double> start = optimum;
@@ -306,9 +312,12 @@ TEST_P(MultipleShooting, BothSchemesConvergeToTheSameSolution) {
     if (scheme == ShootingScheme::kMultiple) {
       EXPECT_LE(std::sqrt(solver.defects().squared_norm()), converged);
     }
-    solution[scheme == ShootingScheme::kMultiple] = solver.solution();
+    solution[products == Products::kExact][scheme == ShootingScheme::kMultiple] = solver.solution();
   }
-  EXPECT_LE((solution[1] - solution[0]).norm(), kSameSolution * solution[0].norm());
+  for (int p = 0; p < products_run; ++p) {
+    EXPECT_LE((solution[p][1] - solution[p][0]).norm(), kSameSolution * solution[p][0].norm());
+  }
+  if (products_run == 2) EXPECT_LE((solution[1][0] - solution[0][0]).norm(), kSameSolution * solution[0][0].norm());
 }
 
 TEST_P(MultipleShooting, AnUpdateCostsOneEvaluationMoreThanSingleShooting) {

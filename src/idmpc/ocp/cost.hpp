@@ -10,6 +10,7 @@
 /// each stage sees, moving or not, are StageTerms' (stage_terms.hpp).
 
 #include "idmpc/model/frame.hpp"
+#include "idmpc/spatial/dual.hpp"
 #include "idmpc/spatial/spatial.hpp"
 
 namespace idmpc {
@@ -54,6 +55,9 @@ class QuadraticCost {
 
   /// @brief ∂L/∂a = Q_a a (inverse-dynamics problem only).
   void acceleration_gradient(In a, Out L_a) const { L_a = w_.Qa.cwiseProduct(a); }
+  void acceleration_gradient(const Eigen::Ref<const VecX<Dual>>& a, Eigen::Ref<VecX<Dual>> L_a) const {
+    L_a = w_.Qa.cwiseProduct(a);
+  }
 
  private:
   OcpWeights w_;

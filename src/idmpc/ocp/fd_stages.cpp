@@ -29,7 +29,9 @@ FdStages<M, Lanes>::FdStages(const Model& model, int N)
     : stage_(static_cast<size_t>(N), Data(model, stage_parts<M, Lanes>())),
       dynamics_stamp_(N),
       lanes_stamp_(N),
-      lanes_(model, lane_parts<M, Lanes>()) {
+      lanes_(model, lane_parts<M, Lanes>()),
+      scratch_(model.n),
+      dual_stamp_(N) {
   const int n = model.n, nl = Lanes ? n : 0;
   if constexpr (kDerivativeLanes) {
     derivatives_.assign(static_cast<size_t>(N),
@@ -38,15 +40,38 @@ FdStages<M, Lanes>::FdStages(const Model& model, int N)
   for (VecX<StagePack>* x : {&ql_, &vl_, &tl_, &gl_}) *x = VecX<StagePack>::Zero(nl);
   const int Nc = kCostateLanes ? N : 0;
   for (MatX<double>* x : {&mu_all_, &gq_all_, &gv_all_}) *x = MatX<double>::Zero(kCostateLanes ? n : 0, Nc);
-  for (Vec* x : {&tau_, &w_, &gq_, &gv_}) *x = Vec::Zero(n);
+}
+
+template <DerivativeMode M, bool Lanes> void FdStages<M, Lanes>::reserve_dual(const Model& model) {
+  if (dual_reserved_) return;
+  dual_stage_.assign(stage_.size(), DataTpl<Dual>(model, stage_parts<M, false>()));
+  dual_scratch_ = Scratch<Dual>(model.n);
+  dual_reserved_ = true;
+}
+
+template <DerivativeMode M, bool Lanes>
+template <typename S>
+void FdStages<M, Lanes>::stage_dynamics(const StageTerms& terms, DataTpl<S>& data, Scratch<S>& s,
+                                        const Eigen::Ref<const VecX<S>>& q, const Eigen::Ref<const VecX<S>>& v,
+                                        const Eigen::Ref<const VecX<S>>& u, Eigen::Ref<VecX<S>> a) {
+  s.tau = u + terms.disturbance();
+  a = aba(terms.model(), data, q, v, s.tau);
 }
 
 template <DerivativeMode M, bool Lanes>
 void FdStages<M, Lanes>::dynamics(const StageTerms& terms, Evaluation ev, int i, In q, In v, In input, Out output) {
   assert(i >= 0 && i < static_cast<int>(stage_.size()));
-  tau_ = input + terms.disturbance();
-  output = aba(terms.model(), stage_[static_cast<size_t>(i)], q, v, tau_);
+  stage_dynamics<double>(terms, stage_[static_cast<size_t>(i)], scratch_, q, v, input, output);
   dynamics_stamp_.stamp(i, ev);
+}
+
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::dynamics(const StageTerms& terms, Evaluation ev, int i, DualIn q, DualIn v, DualIn input,
+                                  DualOut output) {
+  require_dual();
+  assert(i >= 0 && i < static_cast<int>(dual_stage_.size()));
+  stage_dynamics<Dual>(terms, dual_stage_[static_cast<size_t>(i)], dual_scratch_, q, v, input, output);
+  dual_stamp_.stamp(i, ev);
 }
 
 template <DerivativeMode M, bool Lanes>
@@ -119,73 +144,96 @@ void FdStages<M, Lanes>::costate_lanes(const StageTerms& terms, Evaluation ev, i
   for (int k = 0; k < count; ++k) lanes_stamp_.stamp(i0 + k, ev);
 }
 
+// μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = w + μ
 template <DerivativeMode M, bool Lanes>
-template <typename Hu>
-void FdStages<M, Lanes>::adjoint_products(const Model& model, Data& data, In q, In v, In gmm_next, Hu hu,
-                                          bool state) {
-  const VecX<double>& mu = minv_apply(model, data, gmm_next);  // ABA factorization of the stage
-  hu = w_ + mu;
-  if (!state) return;
-  if constexpr (M == DerivativeMode::kAdjoint) {
-    rnea_after_aba(model, data, q, v);  // a = data.qdd: the stage's aba pass, completed
-    rnea_vjp(model, data, mu);
-    gq_ = -data.g_q;
-    gv_ = -data.g_v;
+template <typename S>
+void FdStages<M, Lanes>::stage_hamiltonian(const StageTerms& terms, int i, DataTpl<S>& data, Scratch<S>& s,
+                                           const Eigen::Ref<const VecX<S>>& q, const Eigen::Ref<const VecX<S>>& v,
+                                           const Eigen::Ref<const VecX<S>>& u, const Eigen::Ref<const VecX<S>>& d,
+                                           const Eigen::Ref<const VecX<S>>& rho,
+                                           const Eigen::Ref<const VecX<S>>& lmd_next,
+                                           const Eigen::Ref<const VecX<S>>& gmm_next, Eigen::Ref<VecX<S>> hq,
+                                           Eigen::Ref<VecX<S>> hv, Eigen::Ref<VecX<S>> F, bool state) {
+  const Model& model = terms.model();
+  auto hu = F.head(model.n);
+  terms.torque_gradient(i, u, rho, s.w);
+  if (!kMatrix || !state) {
+    // μ by the stage's ABA factorization, then the RNEA part of the stage and its adjoint at μ
+    // (matrix mode: stage 0, whose state derivatives are never used)
+    const VecX<S>& mu = minv_apply(model, data, gmm_next);
+    hu = s.w + mu;
+    if (state) {
+      if constexpr (!kMatrix) {
+        rnea_after_aba(model, data, q, v);  // a = data.qdd: the stage's aba pass, completed
+        rnea_vjp(model, data, mu);
+        s.gq = -data.g_q;
+        s.gv = -data.g_v;
+      }
+    }
   } else {
-    assert(false && "matrix mode takes the adjoint way on stage 0 only");
+    // the derivative matrices from the stage's ABA in data
+    aba_derivatives_after_aba(model, data, q, v);
+    s.gq.noalias() = data.da_dq.transpose() * gmm_next;
+    s.gv.noalias() = data.da_dv.transpose() * gmm_next;
+    hu = s.w;
+    hu.noalias() += data.Minv.transpose() * gmm_next;
   }
+  terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
 }
 
 template <DerivativeMode M, bool Lanes>
 void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int i, In q, In v, In, In u, In d,
                                      In rho, In lmd_next, In gmm_next, Out hq, Out hv, Out F, bool state) {
   assert(i >= 0 && i < static_cast<int>(stage_.size()));
-  const Model& model = terms.model();
-  auto hu = F.head(model.n);
-  // μ = M⁻¹γ_{i+1};  gq = −(∂ID/∂q)ᵀμ = (∂FD/∂q)ᵀγ,  gv likewise;  hu = w + μ
-  terms.torque_gradient(i, u, rho, w_);
   if constexpr (kCostateLanes) {
     if (lanes_stamp_.current(i, ev)) {
       // at these costates, from costate_lanes
-      hu = w_ + mu_all_.col(i);
-      gq_ = -gq_all_.col(i);
-      gv_ = -gv_all_.col(i);
-      terms.close_stage(i, q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+      Scratch<double>& s = scratch_;
+      terms.torque_gradient(i, u, rho, s.w);
+      F.head(terms.n()) = s.w + mu_all_.col(i);
+      s.gq = -gq_all_.col(i);
+      s.gv = -gv_all_.col(i);
+      terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
       return;
     }
   }
   dynamics_stamp_.require(i, ev, "the Hamiltonian");
-  Data& data = stage_[static_cast<size_t>(i)];
-  if constexpr (!kMatrix) {
-    adjoint_products(model, data, q, v, gmm_next, hu, state);
-  } else if (!state) {
-    adjoint_products(model, data, q, v, gmm_next, hu, false);
-  } else {
-    // from derivative_lanes, or now: the stage's ABA is in data from dynamics
-    const MatX<double>* da_dq = &data.da_dq;
-    const MatX<double>* da_dv = &data.da_dv;
-    const MatX<double>* Minv = &data.Minv;
-    if constexpr (kDerivativeLanes) {
+  if constexpr (kDerivativeLanes) {
+    if (state) {
+      // the derivative matrices from derivative_lanes
       lanes_stamp_.require(i, ev, "the Hamiltonian's derivatives");
       const Derivatives& D = derivatives_[static_cast<size_t>(i)];
-      da_dq = &D.da_dq;
-      da_dv = &D.da_dv;
-      Minv = &D.Minv;
-    } else {
-      aba_derivatives_after_aba(model, data, q, v);
+      Scratch<double>& s = scratch_;
+      terms.torque_gradient(i, u, rho, s.w);
+      s.gq.noalias() = D.da_dq.transpose() * gmm_next;
+      s.gv.noalias() = D.da_dv.transpose() * gmm_next;
+      auto hu = F.head(terms.n());
+      hu = s.w;
+      hu.noalias() += D.Minv.transpose() * gmm_next;
+      terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
+      return;
     }
-    gq_.noalias() = da_dq->transpose() * gmm_next;
-    gv_.noalias() = da_dv->transpose() * gmm_next;
-    hu = w_;
-    hu.noalias() += Minv->transpose() * gmm_next;
   }
-  terms.close_stage(i, q, v, u, d, rho, lmd_next, gq_, gv_, hq, hv, F, state);
+  stage_hamiltonian<double>(terms, i, stage_[static_cast<size_t>(i)], scratch_, q, v, u, d, rho, lmd_next,
+                            gmm_next, hq, hv, F, state);
+}
+
+template <DerivativeMode M, bool Lanes>
+void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int i, DualIn q, DualIn v, DualIn,
+                                     DualIn u, DualIn d, DualIn rho, DualIn lmd_next, DualIn gmm_next, DualOut hq,
+                                     DualOut hv, DualOut F, bool state) {
+  require_dual();
+  dual_stamp_.require(i, ev, "the Hamiltonian");
+  stage_hamiltonian<Dual>(terms, i, dual_stage_[static_cast<size_t>(i)], dual_scratch_, q, v, u, d, rho, lmd_next,
+                          gmm_next, hq, hv, F, state);
 }
 
 template <DerivativeMode M, bool Lanes> std::size_t FdStages<M, Lanes>::workspace_bytes() const {
   std::size_t b = stage_.capacity() * sizeof(Data) + heap_bytes(lanes_) +
                   derivatives_.capacity() * sizeof(Derivatives);
   for (const Data& d : stage_) b += heap_bytes(d);
+  b += dual_stage_.capacity() * sizeof(DataTpl<Dual>);
+  for (const DataTpl<Dual>& d : dual_stage_) b += heap_bytes(d);
   for (const Derivatives& d : derivatives_) b += 3 * static_cast<std::size_t>(d.Minv.size()) * sizeof(double);
   for (const MatX<double>* x : {&mu_all_, &gq_all_, &gv_all_}) b += static_cast<std::size_t>(x->size()) * sizeof(double);
   return b;

@@ -14,7 +14,8 @@
 ///
 /// Each stage's workspace holds the ABA factorization and what its mode adds: the adjoint
 /// sweep's O(n) buffers, or the derivative matrices (3 n×n in lanes, where the derivatives'
-/// scratch is the lanes' alone; 6 n×n and the dense M⁻¹'s 6×n blocks otherwise).
+/// scratch is the lanes' alone; 6 n×n and the dense M⁻¹'s 6×n blocks otherwise). In dual
+/// numbers (exact products, reserve_dual) every stage has such a workspace without lanes.
 
 #include "idmpc/ocp/stage_model.hpp"
 #include "idmpc/spatial/pack.hpp"
@@ -32,6 +33,12 @@ template <DerivativeMode M, bool Lanes> class FdStages final : public StageModel
   void hamiltonian(const StageTerms& terms, Evaluation ev, int i, In q, In v, In a, In u, In d, In rho,
                    In lmd_next, In gmm_next, Out hq, Out hv, Out F, bool state) override;
   std::size_t workspace_bytes() const override;
+  void dynamics(const StageTerms& terms, Evaluation ev, int i, DualIn q, DualIn v, DualIn input,
+                DualOut output) override;
+  void hamiltonian(const StageTerms& terms, Evaluation ev, int i, DualIn q, DualIn v, DualIn a, DualIn u, DualIn d,
+                   DualIn rho, DualIn lmd_next, DualIn gmm_next, DualOut hq, DualOut hv, DualOut F,
+                   bool state) override;
+  void reserve_dual(const Model& model) override;
 
  private:
   static constexpr bool kMatrix = M == DerivativeMode::kMatrix;
@@ -47,10 +54,25 @@ template <DerivativeMode M, bool Lanes> class FdStages final : public StageModel
   void derivative_lanes(const StageTerms& terms, Evaluation ev, int i0, int count, const StageTrajectories& x);
   // whole stages i0 … i0 + count − 1 at the costates x.gmm in lanes: a out, the products kept
   void costate_lanes(const StageTerms& terms, Evaluation ev, int i0, int count, StageTrajectories& x);
-  // μ = M⁻¹γ_{i+1} into hu's products (hu = w + μ), and with state gq = −(∂ID/∂q)ᵀμ, gv likewise,
-  // by the stage's ABA factorization and a reverse sweep
-  template <typename Hu> void adjoint_products(const Model& model, Data& data, In q, In v, In gmm_next, Hu hu,
-                                               bool state);
+
+  /// a stage's scratch vectors in one scalar type
+  template <typename S> struct Scratch {
+    VecX<S> tau, w, gq, gv;
+    explicit Scratch(int n = 0) : tau(VecX<S>::Zero(n)), w(tau), gq(tau), gv(tau) {}
+  };
+
+  // one stage by itself, in scalar S: a = FD(q, v, u + d̂); and F, hq, hv of its Hamiltonian
+  // from that ABA pass (matrix mode: the derivative matrices, stage 0 by the adjoint way)
+  template <typename S> void stage_dynamics(const StageTerms& terms, DataTpl<S>& data, Scratch<S>& s,
+                                            const Eigen::Ref<const VecX<S>>& q, const Eigen::Ref<const VecX<S>>& v,
+                                            const Eigen::Ref<const VecX<S>>& u, Eigen::Ref<VecX<S>> a);
+  template <typename S>
+  void stage_hamiltonian(const StageTerms& terms, int i, DataTpl<S>& data, Scratch<S>& s,
+                         const Eigen::Ref<const VecX<S>>& q, const Eigen::Ref<const VecX<S>>& v,
+                         const Eigen::Ref<const VecX<S>>& u, const Eigen::Ref<const VecX<S>>& d,
+                         const Eigen::Ref<const VecX<S>>& rho, const Eigen::Ref<const VecX<S>>& lmd_next,
+                         const Eigen::Ref<const VecX<S>>& gmm_next, Eigen::Ref<VecX<S>> hq, Eigen::Ref<VecX<S>> hv,
+                         Eigen::Ref<VecX<S>> F, bool state);
 
   std::vector<Data> stage_;            ///< each stage's ABA and what its mode adds
   std::vector<Derivatives> derivatives_;  ///< kDerivativeLanes: each stage's, from the lanes
@@ -59,7 +81,10 @@ template <DerivativeMode M, bool Lanes> class FdStages final : public StageModel
   DataTpl<StagePack> lanes_;              ///< workspace of the stages in lanes
   VecX<StagePack> ql_, vl_, tl_, gl_;     ///< q, v, torque, γ_{i+1} (then μ) in lanes
   MatX<double> mu_all_, gq_all_, gv_all_; ///< kCostateLanes: μ, (∂ID/∂q)ᵀμ, (∂ID/∂v)ᵀμ, n × N
-  Vec tau_, w_, gq_, gv_;                 ///< stage scratch
+  Scratch<double> scratch_;               ///< stage scratch
+  std::vector<DataTpl<Dual>> dual_stage_; ///< reserve_dual: each stage's workspace in dual numbers
+  detail::StageStamps dual_stamp_;        ///< the evaluation of each stage's dual ABA
+  Scratch<Dual> dual_scratch_;
 };
 
 extern template class FdStages<DerivativeMode::kMatrix, false>;

@@ -46,6 +46,7 @@ OcpProblem::OcpProblem(const OcpProblem& o)
       mode_(o.mode_),
       N_(o.N_),
       lanes_(o.lanes_),
+      dual_(o.dual_),
       stages_(o.stages_->clone()),
       evaluations_(o.evaluations_) {}
 
@@ -58,6 +59,7 @@ void OcpProblem::set_stages_in_lanes(bool on) {
   if (on == lanes_) return;
   lanes_ = on;
   stages_ = make_stages();
+  if (dual_) stages_->reserve_dual(terms_.model());
 }
 
 std::unique_ptr<StageModel> OcpProblem::make_stages() const {

@@ -160,6 +160,28 @@ class OcpProblem {
     terms_.state_gradient(stages, q, v, lmd, gmm);
   }
 
+  /// @brief The stage calls above in dual numbers (StageModel): the same arithmetic, stage by
+  /// stage, with the tangents carried along (exact directional products, DESIGN §11). Need
+  /// reserve_dual first.
+  using DualIn = StageModel::DualIn;
+  using DualOut = StageModel::DualOut;
+  void stage_dynamics(Evaluation ev, int i, DualIn q, DualIn v, DualIn input, DualOut output) {
+    stages_->dynamics(terms_, ev, i, q, v, input, output);
+  }
+  void stage_hamiltonian(Evaluation ev, int i, DualIn q, DualIn v, DualIn a, DualIn u, DualIn d, DualIn rho,
+                         DualIn lmd_next, DualIn gmm_next, DualOut hq, DualOut hv, DualOut F, bool state) {
+    stages_->hamiltonian(terms_, ev, i, q, v, a, u, d, rho, lmd_next, gmm_next, hq, hv, F, state);
+  }
+  void terminal_costate(int stages, DualIn q, DualIn v, DualOut lmd, DualOut gmm) const {
+    terms_.state_gradient(stages, q, v, lmd, gmm);
+  }
+  /// @brief Sizes the stages' dual-number workspaces (kept across set_stages_in_lanes).
+  void reserve_dual() {
+    dual_ = true;
+    stages_->reserve_dual(terms_.model());
+  }
+  bool dual_reserved() const { return dual_; }
+
   /// @brief Bytes of heap the stages' workspaces own (per-stage workspaces, lanes and the
   /// products kept from them).
   std::size_t workspace_bytes() const { return stages_->workspace_bytes(); }
@@ -174,6 +196,7 @@ class OcpProblem {
   DerivativeMode mode_;
   int N_;
   bool lanes_ = true;
+  bool dual_ = false;
   std::unique_ptr<StageModel> stages_;
   std::uint64_t evaluations_ = 0;
 };

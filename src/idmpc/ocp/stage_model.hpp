@@ -48,6 +48,9 @@ class StageModel {
   using In = Eigen::Ref<const Vec>;
   using Out = Eigen::Ref<Vec>;
 
+  using DualIn = Eigen::Ref<const VecX<Dual>>;
+  using DualOut = Eigen::Ref<VecX<Dual>>;
+
   virtual ~StageModel() = default;
   virtual std::unique_ptr<StageModel> clone() const = 0;
 
@@ -71,6 +74,26 @@ class StageModel {
 
   /// @brief Bytes of heap the stages' workspaces own (the per-stage ones and the lanes').
   virtual std::size_t workspace_bytes() const = 0;
+
+  /// @brief dynamics and hamiltonian in dual numbers (DESIGN §11): the same arithmetic as the
+  /// stage's own in its derivative mode, stage by stage (never in lanes), each operation also
+  /// carried on the tangents, so that the tangent parts are the exact directional derivatives.
+  /// Needs reserve_dual first (std::logic_error otherwise); their kept linearizations are stamped
+  /// with the evaluation as the double ones.
+  virtual void dynamics(const StageTerms& terms, Evaluation ev, int i, DualIn q, DualIn v, DualIn input,
+                        DualOut output) = 0;
+  virtual void hamiltonian(const StageTerms& terms, Evaluation ev, int i, DualIn q, DualIn v, DualIn a, DualIn u,
+                           DualIn d, DualIn rho, DualIn lmd_next, DualIn gmm_next, DualOut hq, DualOut hv,
+                           DualOut F, bool state) = 0;
+  /// @brief Sizes the dual-number workspaces (one per stage) for `model`, the stages' own.
+  virtual void reserve_dual(const Model& model) = 0;
+  bool dual_reserved() const { return dual_reserved_; }
+
+ protected:
+  bool dual_reserved_ = false;
+  void require_dual() const {
+    if (!dual_reserved_) throw std::logic_error("stage model: dual-number evaluation without reserve_dual");
+  }
 };
 
 namespace detail {

@@ -64,8 +64,8 @@ StageTerms::StageTerms(const StageTerms& o)
       sampled_(o.sampled_),
       frame_(o.frame_),
       p_ref_(o.p_ref_),
-      kinematics_(o.kinematics_),
-      jacobian_(o.jacobian_) {}
+      frame_double_(o.frame_double_),
+      frame_dual_(o.frame_dual_) {}
 
 StageTerms& StageTerms::operator=(const StageTerms& o) {
   if (this != &o) {
@@ -105,7 +105,8 @@ void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
   sampled_ = false;
   if (!target) {
     frame_.reset();
-    kinematics_.reset();
+    frame_double_ = {};
+    frame_dual_ = {};
     return;
   }
   const FrameTarget& f = *target;
@@ -116,8 +117,10 @@ void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
   }
   check_pose(f.frame, f.position, f.rotation);
   frame_ = target;
-  kinematics_.emplace(*model_, frame_->frame);
-  jacobian_ = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
+  frame_double_.kinematics.emplace(*model_, frame_->frame);
+  frame_double_.jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
+  frame_dual_.kinematics.emplace(*model_, frame_->frame);
+  frame_dual_.jacobian = Eigen::Matrix<Dual, 6, Eigen::Dynamic>::Zero(6, n());
   p_ref_ = frame_->position.replicate(1, N_ + 1);
 }
 
@@ -183,26 +186,32 @@ void StageTerms::update_frame_references() {
   }
 }
 
-void StageTerms::state_gradient(int i, In q, In v, Out L_q, Out L_v) const {
+template <typename S>
+void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v) const {
   const VecX<double>& Qq = cost_.weights().Qq;
   const VecX<double>& Qv = cost_.weights().Qv;
   L_q = Qq.cwiseProduct(q - q_ref_.col(i));
   L_v = Qv.cwiseProduct(v - v_ref_.col(i));
   if (!frame_) return;
   // Jᵀf with f_lin = w_p∘(p − p_ref), f_ang = ½w_o vee(A − Aᵀ), A = R R_refᵀ (cost.hpp)
-  FrameKinematics<double>& fk = *kinematics_;
+  FrameScratch<S>& scratch = frame_scratch<S>();
+  FrameKinematics<S>& fk = *scratch.kinematics;
   fk.compute(*model_, q);
-  const Vec3<double> f_lin = frame_->position_weight.cwiseProduct(fk.position() - p_ref_.col(i));
-  const Mat3<double> A = fk.rotation() * frame_->rotation.transpose();
-  const Vec3<double> f_ang =
-      (0.5 * frame_->orientation_weight) * Vec3<double>(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
+  const Vec3<S> f_lin = frame_->position_weight.cwiseProduct(fk.position() - p_ref_.col(i));
+  const Mat3<S> A = fk.rotation() * frame_->rotation.transpose();
+  const Vec3<S> f_ang =
+      (0.5 * frame_->orientation_weight) * Vec3<S>(A(2, 1) - A(1, 2), A(0, 2) - A(2, 0), A(1, 0) - A(0, 1));
   if (frame_jacobian_matrix_) {
-    fk.jacobian(jacobian_);
-    L_q.noalias() += jacobian_.topRows<3>().transpose() * f_lin;
-    L_q.noalias() += jacobian_.bottomRows<3>().transpose() * f_ang;
+    fk.jacobian(scratch.jacobian);
+    L_q.noalias() += scratch.jacobian.template topRows<3>().transpose() * f_lin;
+    L_q.noalias() += scratch.jacobian.template bottomRows<3>().transpose() * f_ang;
   } else {
     fk.add_jacobian_transpose_times(f_lin, f_ang, L_q);
   }
 }
+
+template void StageTerms::state_gradient_of<double>(int, RefIn<double>, RefIn<double>, RefOut<double>,
+                                                    RefOut<double>) const;
+template void StageTerms::state_gradient_of<Dual>(int, RefIn<Dual>, RefIn<Dual>, RefOut<Dual>, RefOut<Dual>) const;
 
 }  // namespace idmpc

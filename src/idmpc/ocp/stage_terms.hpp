@@ -14,12 +14,14 @@
 
 #include <memory>
 #include <optional>
+#include <type_traits>
 
 #include "idmpc/dynamics/kinematics.hpp"
 #include "idmpc/model/data.hpp"
 #include "idmpc/ocp/cost.hpp"
 #include "idmpc/ocp/torque_limits.hpp"
 #include "idmpc/ocp/trajectory.hpp"
+#include "idmpc/spatial/dual.hpp"
 
 namespace idmpc {
 
@@ -28,6 +30,10 @@ class StageTerms {
   using Vec = VecX<double>;
   using In = Eigen::Ref<const Vec>;
   using Out = Eigen::Ref<Vec>;
+  /// The same in dual numbers (exact directional derivatives, DESIGN §11): every stage function
+  /// below has an overload for them, with the references constants.
+  using DualIn = Eigen::Ref<const VecX<Dual>>;
+  using DualOut = Eigen::Ref<VecX<Dual>>;
 
   /// @brief N stages and the terminal cost; sets the cost's torque reference to
   /// u_ref = ID(q_ref, 0, 0). `mode` says how the frame cost's gradient is formed (matrix: the
@@ -88,10 +94,8 @@ class StageTerms {
 
   /// @brief w = ∂(L + ρᵀ(s∘c))/∂u = R(u − u_ref,i) + 2s∘ρ∘(u − ū) on the bounded joints of stage
   /// i (u, w size n; ρ size m).
-  void torque_gradient(int i, In u, In rho, Out w) const {
-    w = cost_.weights().R.cwiseProduct(u - u_ref_.col(i));
-    bounds_.add_torque_gradient(u, rho, w);
-  }
+  void torque_gradient(int i, In u, In rho, Out w) const { torque_gradient_of<double>(i, u, rho, w); }
+  void torque_gradient(int i, DualIn u, DualIn rho, DualOut w) const { torque_gradient_of<Dual>(i, u, rho, w); }
 
   /// @brief torque_gradient of the stages i0 … i0 + count − 1 in SIMD lanes (unused lanes repeat
   /// the last stage): u, w size n, ρ size m, of packs P.
@@ -111,13 +115,35 @@ class StageTerms {
 
   /// @brief The state part of stage i's cost gradient, ∂L/∂q and ∂L/∂v (i = N: ∂φ/∂q, ∂φ/∂v,
   /// the terminal costates): the joint terms and, with a frame target, Jᵀf (cost.hpp).
-  void state_gradient(int i, In q, In v, Out L_q, Out L_v) const;
+  void state_gradient(int i, In q, In v, Out L_q, Out L_v) const { state_gradient_of<double>(i, q, v, L_q, L_v); }
+  void state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const {
+    state_gradient_of<Dual>(i, q, v, L_q, L_v);
+  }
 
   /// @brief The rest of stage i's block F_i once its first n rows hold ∂H/∂input: ∂H/∂d =
   /// −r_d + 2s∘ρ∘d and ∂H/∂ρ = s∘c; with `state` also hq = ∂L/∂q + gq and hv = ∂L/∂v + λ_{i+1}
   /// + gv (the Euler step q_{i+1} = q_i + Δτ v_i), for the dynamics' parts gq, gv of ∂H/∂q, ∂H/∂v.
   void close_stage(int i, In q, In v, In u, In d, In rho, In lmd_next, In gq, In gv, Out hq, Out hv, Out F,
                    bool state) const {
+    close_stage_of<double>(i, q, v, u, d, rho, lmd_next, gq, gv, hq, hv, F, state);
+  }
+  void close_stage(int i, DualIn q, DualIn v, DualIn u, DualIn d, DualIn rho, DualIn lmd_next, DualIn gq,
+                   DualIn gv, DualOut hq, DualOut hv, DualOut F, bool state) const {
+    close_stage_of<Dual>(i, q, v, u, d, rho, lmd_next, gq, gv, hq, hv, F, state);
+  }
+
+ private:
+  template <typename S> using RefIn = Eigen::Ref<const VecX<S>>;
+  template <typename S> using RefOut = Eigen::Ref<VecX<S>>;
+
+  template <typename S> void torque_gradient_of(int i, RefIn<S> u, RefIn<S> rho, RefOut<S> w) const {
+    w = cost_.weights().R.cwiseProduct(u - u_ref_.col(i));
+    bounds_.add_torque_gradient(u, rho, w);
+  }
+  template <typename S> void state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v) const;
+  template <typename S>
+  void close_stage_of(int i, RefIn<S> q, RefIn<S> v, RefIn<S> u, RefIn<S> d, RefIn<S> rho, RefIn<S> lmd_next,
+                      RefIn<S> gq, RefIn<S> gv, RefOut<S> hq, RefOut<S> hv, RefOut<S> F, bool state) const {
     const int n = this->n(), m = this->m();
     if (m > 0) bounds_.dummy_gradients(u, d, rho, F.segment(n, m), F.segment(n + m, m));
     if (!state) return;
@@ -126,7 +152,20 @@ class StageTerms {
     hv += lmd_next + gv;
   }
 
- private:
+  /// The frame's kinematics at a stage's q and what its gradient needs, in one scalar type
+  /// (state_gradient is const: scratch, not state).
+  template <typename S> struct FrameScratch {
+    std::optional<FrameKinematics<S>> kinematics;
+    Eigen::Matrix<S, 6, Eigen::Dynamic> jacobian;
+  };
+  template <typename S> FrameScratch<S>& frame_scratch() const {
+    if constexpr (std::is_same_v<S, Dual>) {
+      return frame_dual_;
+    } else {
+      return frame_double_;
+    }
+  }
+
   // q_ref_, v_ref_ and u_ref_ = ID(q_ref, 0, 0) − d̂ of every stage, from the fixed target or the
   // joint trajectory's samples
   void update_joint_references();
@@ -148,10 +187,8 @@ class StageTerms {
 
   std::optional<FrameTarget> frame_;
   MatX<double> p_ref_;                  ///< 3 × (N+1) frame positions
-  // the frame's kinematics at a stage's q and what its gradient needs (state_gradient is const:
-  // scratch, not state)
-  mutable std::optional<FrameKinematics<double>> kinematics_;
-  mutable Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian_;
+  mutable FrameScratch<double> frame_double_;
+  mutable FrameScratch<Dual> frame_dual_;
   Vec3<double> sample3_, rate3_;
 };
 

@@ -65,7 +65,8 @@ class TorqueBounds {
   void set_dummy_weight_factor(double f) { r_d_ = f * r_d_nominal_; }
 
   /// @brief w_j += 2 s_k ρ_k (u_j − ū_k) for the bounded joints j = joints()[k] (u, w size n).
-  void add_torque_gradient(In u, In rho, Out w) const {
+  /// For double or dual-number vectors (Eigen expressions).
+  template <typename U, typename Rho, typename W> void add_torque_gradient(const U& u, const Rho& rho, W&& w) const {
     for (int k = 0; k < m(); ++k) {
       const int j = joint_[static_cast<size_t>(k)];
       w[j] += 2 * scale_[k] * rho[k] * (u[j] - middle_[k]);
@@ -73,9 +74,11 @@ class TorqueBounds {
   }
 
   /// @brief ∂H/∂d = −r_d + 2s∘ρ∘d and ∂H/∂ρ = s∘c (u size n; d, rho, H_d, H_rho size m).
-  void dummy_gradients(In u, In d, In rho, Out H_d, Out H_rho) const {
+  /// For double or dual-number vectors (Eigen expressions).
+  template <typename U, typename D, typename Rho, typename HD, typename HRho>
+  void dummy_gradients(const U& u, const D& d, const Rho& rho, HD&& H_d, HRho&& H_rho) const {
     for (int k = 0; k < m(); ++k) {
-      const double e = u[joint_[static_cast<size_t>(k)]] - middle_[k];
+      const auto e = u[joint_[static_cast<size_t>(k)]] - middle_[k];
       H_d[k] = -r_d_[k] + 2 * scale_[k] * rho[k] * d[k];
       H_rho[k] = scale_[k] * (e * e + d[k] * d[k] - half_range_[k] * half_range_[k]);
     }

@@ -61,6 +61,14 @@ ShootingScheme parse_shooting(const std::string& s) {
   throw std::invalid_argument("shooting must be 'single' or 'multiple', got '" + s + "'");
 }
 
+std::string to_string(Products p) { return p == Products::kDifference ? "difference" : "exact"; }
+
+Products parse_products(const std::string& s) {
+  if (s == "difference") return Products::kDifference;
+  if (s == "exact") return Products::kExact;
+  throw std::invalid_argument("products must be 'difference' or 'exact', got '" + s + "'");
+}
+
 void CgmresSettings::validate() const {
   require(kmax >= 1, "kmax must be at least 1", kmax);
   require(dt > 0 && std::isfinite(dt), "sampling period dt must be positive", dt);
@@ -85,6 +93,7 @@ Cgmres::Cgmres(Shooting& ocp, const CgmresSettings& settings)
   X_.resize(n, ocp.N());
   E_.resize(n, ocp.N());
   Eh_.resize(n, ocp.N());
+  if (settings_.products == Products::kExact) ocp_.enable_exact_products();
 }
 
 void Cgmres::set_solution(const Eigen::Ref<const VecX<double>>& U) {
@@ -191,6 +200,10 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
       if (it == settings_.init_iterations) return false;
       // direction by GMRES on forward-difference products
       auto apply = [&](const Eigen::Ref<const VecX<double>>& W, Eigen::Ref<VecX<double>> out) {
+        if (settings_.products == Products::kExact) {
+          ocp_.residual_and_product(U_, W, q, v, Tk, Fw, out);
+          return;
+        }
         Uw = U_ + h * W;
         ocp_.residual(Uw, q, v, Tk, Fw);
         out = (Fw - F) / h;
@@ -326,9 +339,13 @@ bool Cgmres::step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen
     return false;
   }
 
-  // (∂F/∂U) W ≈ [F(U + hW, x + hẋ, t + h) − F(U, x + hẋ, t + h)] / h, warm start from U̇
+  // (∂F/∂U) W at (U, x + hẋ, t + h): exact, or ≈ [F(U + hW, ·) − F(U, ·)] / h; warm start from U̇
   bool vanished = false;
   auto apply = [&](const Eigen::Ref<const VecX<double>>& W, Eigen::Ref<VecX<double>> out) {
+    if (settings_.products == Products::kExact) {
+      ocp_.residual_and_product(U_, W, qh_, vh_, Th, Fw_, out, defects);
+      return;
+    }
     Uw_ = U_ + h * W;
     ocp_.residual(Uw_, qh_, vh_, Th, Fw_, defects);
     // h·W below the resolution of U or F: the product is 0 and GMRES would report convergence
@@ -342,16 +359,27 @@ bool Cgmres::step(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen
     return false;
   }
   if (multiple()) {
-    // the stored trajectories move along the condensed direction: (retrieved − stored)/h
-    Uw_ = U_ + h * Udot_;
-    ocp_.residual(Uw_, qh_, vh_, Th, Fw_, defects);
-    const ShootingTrajectory& r = ocp_.trajectory();
+    // the stored trajectories move along the condensed direction: (retrieved − stored)/h, the
+    // trajectories retrieved at (U + hU̇, x + hẋ, t + h); with exact products, those at
+    // (U, x + hẋ, t + h) and their exact tangent along U̇ in place of the difference in U
     const double f = settings_.dt / h;
     const Eigen::Index N = ocp_.N();
-    X_.q.rightCols(N) += f * (r.q.rightCols(N) - X_.q.rightCols(N));
-    X_.v.rightCols(N) += f * (r.v.rightCols(N) - X_.v.rightCols(N));
-    X_.lmd.rightCols(N) += f * (r.lmd.rightCols(N) - X_.lmd.rightCols(N));
-    X_.gmm.rightCols(N) += f * (r.gmm.rightCols(N) - X_.gmm.rightCols(N));
+    const ShootingTrajectory& r = ocp_.trajectory();
+    if (settings_.products == Products::kExact) {
+      ocp_.residual_and_product(U_, Udot_, qh_, vh_, Th, Fw_, Uw_, defects);
+      const ShootingTrajectory& dr = ocp_.trajectory_tangent();
+      X_.q.rightCols(N) += f * (r.q.rightCols(N) - X_.q.rightCols(N)) + settings_.dt * dr.q.rightCols(N);
+      X_.v.rightCols(N) += f * (r.v.rightCols(N) - X_.v.rightCols(N)) + settings_.dt * dr.v.rightCols(N);
+      X_.lmd.rightCols(N) += f * (r.lmd.rightCols(N) - X_.lmd.rightCols(N)) + settings_.dt * dr.lmd.rightCols(N);
+      X_.gmm.rightCols(N) += f * (r.gmm.rightCols(N) - X_.gmm.rightCols(N)) + settings_.dt * dr.gmm.rightCols(N);
+    } else {
+      Uw_ = U_ + h * Udot_;
+      ocp_.residual(Uw_, qh_, vh_, Th, Fw_, defects);
+      X_.q.rightCols(N) += f * (r.q.rightCols(N) - X_.q.rightCols(N));
+      X_.v.rightCols(N) += f * (r.v.rightCols(N) - X_.v.rightCols(N));
+      X_.lmd.rightCols(N) += f * (r.lmd.rightCols(N) - X_.lmd.rightCols(N));
+      X_.gmm.rightCols(N) += f * (r.gmm.rightCols(N) - X_.gmm.rightCols(N));
+    }
   }
   U_ += settings_.dt * Udot_;
   evaluations_ = static_cast<int>(ocp_.times().evaluations - evals0);

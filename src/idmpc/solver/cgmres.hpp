@@ -3,7 +3,8 @@
 /// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6, §9), one solver for every problem and
 /// both shooting schemes:
 /// Ḟ = −ζF is tracked by solving (∂F/∂U) U̇ = −ζF − (∂F/∂x)ẋ − ∂F/∂t with matrix-free
-/// forward-difference products and kmax GMRES iterations, then U ← U + Δt U̇.
+/// products (forward differences, the paper's way, or exact ones in dual numbers: Products) and
+/// kmax GMRES iterations, then U ← U + Δt U̇.
 ///
 /// Multiple shooting (as in Ohtsuka's and autogenu's multiple-shooting C/GMRES): the states and
 /// costates of stages 1 … N are unknowns too, and all residuals — F_U and the defects E of the
@@ -31,9 +32,20 @@ enum class ShootingScheme { kSingle, kMultiple };
 std::string to_string(ShootingScheme s);
 ShootingScheme parse_shooting(const std::string& s);
 
+/// @brief How C/GMRES forms its products (∂F/∂U)·W (DESIGN §11): by the paper's forward
+/// difference [F(U + hW) − F(U)]/h, or exactly, by one evaluation in dual numbers
+/// (Shooting::residual_and_product).
+enum class Products { kDifference, kExact };
+/// @brief "difference"/"exact"; parse throws std::invalid_argument naming the value.
+std::string to_string(Products p);
+Products parse_products(const std::string& s);
+
 struct CgmresSettings {
   int kmax = 10;
   ShootingScheme shooting = ShootingScheme::kSingle;
+  /// @brief The GMRES products (and those of the full-horizon start). The right-hand side's
+  /// (∂F/∂x)ẋ + ∂F/∂t stays a forward difference with either.
+  Products products = Products::kDifference;
   double Tf = 0.5;
   double alpha = 1.0;
   double dt = 1e-3;    ///< sampling period Δt

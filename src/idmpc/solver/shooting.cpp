@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cassert>
 #include <chrono>
+#include <stdexcept>
+#include <type_traits>
+
+#include "idmpc/model/checks.hpp"
 
 namespace idmpc {
 
@@ -45,20 +49,76 @@ Shooting::Shooting(OcpProblem problem) : problem_(std::move(problem)) {
   for (Vec* x : {&hq_, &hv_, &phi_q_, &phi_v_}) *x = Vec::Zero(n);
 }
 
-void Shooting::unpack(In U, int stages) {
+template <typename S> void Shooting::unpack(Sweep<S>& x, const Eigen::Ref<const VecX<S>>& U, int stages) const {
   const int n = problem_.n(), m = problem_.m(), sd = problem_.stage_dim();
-  MatX<double>& input = problem_.formulation() == Formulation::kForwardDynamics ? u_ : a_;
+  MatX<S>& input = problem_.formulation() == Formulation::kForwardDynamics ? x.u : x.a;
   for (int i = 0; i < stages; ++i) {
     input.col(i) = U.segment(i * sd, n);
     if (m > 0) {
-      d_.col(i) = U.segment(i * sd + n, m);
-      rho_.col(i) = U.segment(i * sd + n + m, m);
+      x.d.col(i) = U.segment(i * sd + n, m);
+      x.rho.col(i) = U.segment(i * sd + n + m, m);
     }
   }
 }
 
+void Shooting::enable_exact_products() {
+  if (exact_products()) return;
+  problem_.reserve_dual();
+  const int n = problem_.n(), m = problem_.m(), N = problem_.N();
+  DualBuffers& b = dual_;
+  for (MatX<Dual>* x : {&b.q, &b.v, &b.lmd, &b.gmm}) *x = MatX<Dual>::Zero(n, N + 1);
+  for (MatX<Dual>* x : {&b.a, &b.u}) *x = MatX<Dual>::Zero(n, N);
+  for (MatX<Dual>* x : {&b.d, &b.rho}) *x = MatX<Dual>::Zero(m, N);
+  for (VecX<Dual>* x : {&b.hq, &b.hv, &b.q0, &b.v0}) *x = VecX<Dual>::Zero(n);
+  for (VecX<Dual>* x : {&b.U, &b.F}) *x = VecX<Dual>::Zero(dim());
+  dx_.resize(n, N);
+}
+
 void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int stages, const ShootingDefects* e) {
+  sweep<double>({x_.q, x_.v, x_.lmd, x_.gmm, a_, u_, d_, rho_, hq_, hv_}, U, q0, v0, T, F, stages, e);
+}
+
+void Shooting::residual_and_product(In U, In W, In q0, In v0, double T, Eigen::Ref<Vec> F, Eigen::Ref<Vec> dF,
+                                    const ShootingDefects* e) {
+  if (!exact_products()) throw std::logic_error("Shooting::residual_and_product: call enable_exact_products first");
+  IDMPC_CHECK_ARGUMENT(U.size() == dim() && W.size() == dim() && F.size() == dim() && dF.size() == dim(),
+                       "Shooting::residual_and_product: U, W, F and dF must have size dim");
+  DualBuffers& b = dual_;
+  for (Eigen::Index k = 0; k < U.size(); ++k) b.U[k] = Dual(U[k], W[k]);
+  for (Eigen::Index k = 0; k < q0.size(); ++k) {
+    b.q0[k] = Dual(q0[k]);
+    b.v0[k] = Dual(v0[k]);
+  }
+  sweep<Dual>({b.q, b.v, b.lmd, b.gmm, b.a, b.u, b.d, b.rho, b.hq, b.hv}, b.U, b.q0, b.v0, T, b.F, N(), e);
+  for (Eigen::Index k = 0; k < F.size(); ++k) {
+    F[k] = b.F[k].x;
+    dF[k] = b.F[k].dx;
+  }
+  // the values are the trajectories of the evaluation, the tangents their derivatives along W
+  for (Eigen::Index c = 0; c < x_.q.cols(); ++c) {
+    for (Eigen::Index r = 0; r < x_.q.rows(); ++r) {
+      x_.q(r, c) = b.q(r, c).x;
+      x_.v(r, c) = b.v(r, c).x;
+      x_.lmd(r, c) = b.lmd(r, c).x;
+      x_.gmm(r, c) = b.gmm(r, c).x;
+      dx_.q(r, c) = b.q(r, c).dx;
+      dx_.v(r, c) = b.v(r, c).dx;
+      dx_.lmd(r, c) = b.lmd(r, c).dx;
+      dx_.gmm(r, c) = b.gmm(r, c).dx;
+      if (c < a_.cols()) {
+        a_(r, c) = b.a(r, c).x;
+        u_(r, c) = b.u(r, c).x;
+      }
+    }
+  }
+}
+
+template <typename S>
+void Shooting::sweep(Sweep<S> x, const Eigen::Ref<const VecX<S>>& U, const Eigen::Ref<const VecX<S>>& q0,
+                     const Eigen::Ref<const VecX<S>>& v0, double T, Eigen::Ref<VecX<S>> F, int stages,
+                     const ShootingDefects* e) {
   using clock = std::chrono::steady_clock;
+  constexpr bool dual = std::is_same_v<S, Dual>;
   const int sd = problem_.stage_dim();
   assert(stages >= 1 && stages <= N() && U.size() >= stages * sd && F.size() >= stages * sd);
   assert(e == nullptr || stages == N());
@@ -67,47 +127,50 @@ void Shooting::residual(In U, In q0, In v0, double T, Eigen::Ref<Vec> F, int sta
   const auto t0 = timing_ ? clock::now() : clock::time_point{};
 
   // forward sweep: explicit Euler from the measured state (eq. 12), plus the defects; FD's
-  // accelerations are the stage dynamics, ID's are the inputs
+  // accelerations are the stage dynamics, ID's are the inputs (in dual numbers every stage's
+  // dynamics runs here, stage by stage)
   const Evaluation ev = problem_.begin_evaluation();
   const bool fd = problem_.formulation() == Formulation::kForwardDynamics;
-  unpack(U, stages);
-  auto& q = x_.q;
-  auto& v = x_.v;
-  q.col(0) = q0;
-  v.col(0) = v0;
+  unpack(x, U, stages);
+  x.q.col(0) = q0;
+  x.v.col(0) = v0;
   for (int i = 0; i < stages; ++i) {
-    if (fd) problem_.stage_dynamics(ev, i, q.col(i), v.col(i), u_.col(i), a_.col(i));
-    q.col(i + 1) = q.col(i) + dtau * v.col(i);
-    v.col(i + 1) = v.col(i) + dtau * a_.col(i);
+    if (fd) {
+      problem_.stage_dynamics(ev, i, x.q.col(i), x.v.col(i), x.u.col(i), x.a.col(i));
+    } else if constexpr (dual) {
+      problem_.stage_dynamics(ev, i, x.q.col(i), x.v.col(i), x.a.col(i), x.u.col(i));
+    }
+    x.q.col(i + 1) = x.q.col(i) + dtau * x.v.col(i);
+    x.v.col(i + 1) = x.v.col(i) + dtau * x.a.col(i);
     if (e) {
-      q.col(i + 1) += e->q.col(i);
-      v.col(i + 1) += e->v.col(i);
+      x.q.col(i + 1) += e->q.col(i);
+      x.v.col(i + 1) += e->v.col(i);
     }
   }
-  // what runs once the states are known (ID: the stages' dynamics; in lanes if enabled)
-  StageTrajectories traj = trajectories(stages, nullptr);
-  problem_.stages_at_states(ev, traj);
+  if constexpr (!dual) {
+    // what runs once the states are known (ID: the stages' dynamics; in lanes if enabled)
+    StageTrajectories traj = trajectories(stages, nullptr);
+    problem_.stages_at_states(ev, traj);
+  }
   const auto t1 = timing_ ? clock::now() : t0;
 
   // terminal costates (eqs. 16, 18), then the backward sweep (eqs. 22–24); λ_0, γ_0 are
   // never used, so stage 0 gives F_0 only
-  auto& lmd = x_.lmd;
-  auto& gmm = x_.gmm;
-  problem_.terminal_costate(stages, q.col(stages), v.col(stages), lmd.col(stages), gmm.col(stages));
+  problem_.terminal_costate(stages, x.q.col(stages), x.v.col(stages), x.lmd.col(stages), x.gmm.col(stages));
   if (e) {
-    lmd.col(stages) += e->lmd.col(stages);
-    gmm.col(stages) += e->gmm.col(stages);
+    x.lmd.col(stages) += e->lmd.col(stages);
+    x.gmm.col(stages) += e->gmm.col(stages);
   }
   for (int i = stages - 1; i >= 0; --i) {
     const bool state = i > 0;
-    problem_.stage_hamiltonian(ev, i, q.col(i), v.col(i), a_.col(i), u_.col(i), d_.col(i), rho_.col(i),
-                               lmd.col(i + 1), gmm.col(i + 1), hq_, hv_, F.segment(i * sd, sd), state);
+    problem_.stage_hamiltonian(ev, i, x.q.col(i), x.v.col(i), x.a.col(i), x.u.col(i), x.d.col(i), x.rho.col(i),
+                               x.lmd.col(i + 1), x.gmm.col(i + 1), x.hq, x.hv, F.segment(i * sd, sd), state);
     if (!state) break;
-    lmd.col(i) = lmd.col(i + 1) + dtau * hq_;
-    gmm.col(i) = gmm.col(i + 1) + dtau * hv_;
+    x.lmd.col(i) = x.lmd.col(i + 1) + dtau * x.hq;
+    x.gmm.col(i) = x.gmm.col(i + 1) + dtau * x.hv;
     if (e) {
-      lmd.col(i) += e->lmd.col(i);
-      gmm.col(i) += e->gmm.col(i);
+      x.lmd.col(i) += e->lmd.col(i);
+      x.gmm.col(i) += e->gmm.col(i);
     }
   }
   if (timing_) {
@@ -135,7 +198,8 @@ void Shooting::residual_at(In U, const ShootingTrajectory& at, In q0, In v0, dou
   x_.v.col(0) = v0;
   x_.lmd = at.lmd;
   x_.gmm = at.gmm;
-  unpack(U, N);
+  Sweep<double> x{x_.q, x_.v, x_.lmd, x_.gmm, a_, u_, d_, rho_, hq_, hv_};
+  unpack(x, U, N);
   StageTrajectories traj = trajectories(N, &x_.gmm);
   problem_.stages_at_costates(ev, traj);
   const auto& q = x_.q;

@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "idmpc/ocp/problem.hpp"
+#include "idmpc/spatial/dual.hpp"
 
 namespace idmpc {
 
@@ -93,6 +94,21 @@ class Shooting {
     residual(U, q0, v0, T, F, N(), defects);
   }
 
+  /// @brief The residual of the full horizon and its exact directional derivative along W:
+  /// F = residual(U, q0, v0, T, defects) and dF = (∂F/∂U)·W at fixed state, time and defects,
+  /// by one evaluation in dual numbers (DESIGN §11): the same stage arithmetic, stage by stage,
+  /// each operation carrying its tangent. No increment, no cancellation: dF is exact up to
+  /// rounding. Needs enable_exact_products (std::logic_error otherwise); allocation-free after
+  /// it. Fills trajectory() with the values.
+  void residual_and_product(In U, In W, In q0, In v0, double T, Eigen::Ref<Vec> F, Eigen::Ref<Vec> dF,
+                            const ShootingDefects* defects = nullptr);
+  /// @brief The tangents of the states and costates of the last residual_and_product: their
+  /// derivatives along W (column 0 of q, v zero).
+  const ShootingTrajectory& trajectory_tangent() const { return dx_; }
+  /// @brief Sizes what residual_and_product needs (dual-number stage workspaces and trajectories).
+  void enable_exact_products();
+  bool exact_products() const { return problem_.dual_reserved(); }
+
   /// @brief Multiple shooting: F_U (size dim) and the defects of the stored states and costates
   /// `at` (columns 1 … N) with x_0 = (q0, v0) measured, horizon T. Every stage is evaluated at
   /// its stored state, independently of the others (in SIMD lanes: ID with adjoints, and FD with
@@ -123,8 +139,33 @@ class Shooting {
   void reset_times() { times_ = OcpTimes{}; }
 
  private:
+  /// the horizon's trajectories of one evaluation in scalar S: states and costates n × (N+1),
+  /// accelerations and torques n × N, dummy inputs and multipliers m × N, ∂H/∂q and ∂H/∂v
+  template <typename S> struct Sweep {
+    MatX<S>& q;
+    MatX<S>& v;
+    MatX<S>& lmd;
+    MatX<S>& gmm;
+    MatX<S>& a;
+    MatX<S>& u;
+    MatX<S>& d;
+    MatX<S>& rho;
+    VecX<S>& hq;
+    VecX<S>& hv;
+  };
+  /// the buffers of the dual-number evaluations
+  struct DualBuffers {
+    MatX<Dual> q, v, lmd, gmm, a, u, d, rho;
+    VecX<Dual> hq, hv, U, q0, v0, F;
+  };
+
+  // single shooting's forward and backward sweeps (residual, residual_and_product) in scalar S
+  template <typename S>
+  void sweep(Sweep<S> x, const Eigen::Ref<const VecX<S>>& U, const Eigen::Ref<const VecX<S>>& q0,
+             const Eigen::Ref<const VecX<S>>& v0, double T, Eigen::Ref<VecX<S>> F, int stages,
+             const ShootingDefects* e);
   // U's stage blocks into the input, d and ρ columns
-  void unpack(In U, int stages);
+  template <typename S> void unpack(Sweep<S>& x, const Eigen::Ref<const VecX<S>>& U, int stages) const;
   // the horizon's trajectories, columns 0 … stages − 1, for the problem's calls across stages
   StageTrajectories trajectories(int stages, const MatX<double>* gmm) {
     return StageTrajectories{stages, x_.q, x_.v, a_, u_, rho_, gmm};
@@ -138,6 +179,8 @@ class Shooting {
   MatX<double> a_, u_;       ///< n × N accelerations and torques
   MatX<double> d_, rho_;     ///< m × N dummy inputs and multipliers
   Vec hq_, hv_, phi_q_, phi_v_;  ///< ∂H/∂q, ∂H/∂v; terminal gradient
+  DualBuffers dual_;             ///< enable_exact_products
+  ShootingTrajectory dx_;        ///< trajectory_tangent
 };
 
 }  // namespace idmpc
