@@ -19,6 +19,8 @@
 // BM_Update/<fd|id>_<matrix|adjoint>_multiple/…: the same controllers under multiple shooting
 //   (DESIGN §9), on Tables 1–3 and n ≤ 32;
 // BM_Residual/<controller>/n:<n>/N:25 times one F evaluation on the same states and solutions;
+// BM_Update/<controller>_exact/…: with exact products (DESIGN §11), N = 25, kmax = 10, n ≤ 16;
+// BM_Product/<controller>_exact/n:<n>/N:25 times one exact product with its residual;
 // BM_StageVectorOps/n:<n> times the vector work of one ID stage without its dynamics calls.
 
 #include <chrono>
@@ -50,9 +52,11 @@ struct Controller {
   DerivativeMode mode;
   bool simd_stages = true;  ///< horizon stages in SIMD lanes where independent (the default)
   ShootingScheme shooting = ShootingScheme::kSingle;
+  Products products = Products::kDifference;
   std::string name() const {
     return to_string(formulation) + "_" + to_string(mode) + (simd_stages ? "" : "_scalar") +
-           (shooting == ShootingScheme::kSingle ? "" : "_" + to_string(shooting));
+           (shooting == ShootingScheme::kSingle ? "" : "_" + to_string(shooting)) +
+           (products == Products::kDifference ? "" : "_" + to_string(products));
   }
 };
 
@@ -71,6 +75,11 @@ const Controller kControllers[] = {
     {Formulation::kForwardDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kMultiple},
     {Formulation::kInverseDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kMultiple},
     {Formulation::kInverseDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kMultiple},
+    // exact products in dual numbers, stage by stage (DESIGN §11; N = 25, kmax = 10, n ≤ 16)
+    {Formulation::kForwardDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kSingle, Products::kExact},
+    {Formulation::kForwardDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kSingle, Products::kExact},
+    {Formulation::kInverseDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kSingle, Products::kExact},
+    {Formulation::kInverseDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kSingle, Products::kExact},
 };
 
 struct Case {
@@ -78,7 +87,8 @@ struct Case {
   int n, N, kmax;
   auto key() const {
     return std::make_tuple(static_cast<int>(controller.formulation), static_cast<int>(controller.mode),
-                           controller.simd_stages, static_cast<int>(controller.shooting), n, N, kmax);
+                           controller.simd_stages, static_cast<int>(controller.shooting),
+                           static_cast<int>(controller.products), n, N, kmax);
   }
 };
 
@@ -117,6 +127,7 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   f.ocp->set_stage_batching(c.controller.simd_stages);
   CgmresSettings settings = paper.cgmres;
   settings.shooting = c.controller.shooting;
+  settings.products = c.controller.products;
   f.start = std::make_unique<Cgmres>(*f.ocp, settings);
   f.start->initialize(0.0, q0, v0);
 
@@ -237,6 +248,28 @@ void BM_Residual(benchmark::State& state, Case c) {
   common_counters(state, c, f);
 }
 
+// one exact product (∂F/∂U)·W with the residual, in dual numbers, on the recorded states and
+// solutions (W: the solution's direction, any fixed vector of its size does): beside
+// BM_Residual, the cost of an exact product against a difference product's one evaluation
+void BM_Product(benchmark::State& state, Case c) {
+  SolverFixture& f = fixture(c);
+  if (f.t.empty()) {
+    state.SkipWithError("the swing-up diverged before its first update");
+    return;
+  }
+  const VecX<double> W = VecX<double>::Ones(f.ocp->dim());
+  VecX<double> dF = VecX<double>::Zero(f.ocp->dim());
+  size_t k = 0;
+  for (auto _ : state) {
+    if (k == f.t.size()) k = 0;
+    f.ocp->residual_and_product(f.U[k], W, f.q[k], f.v[k], f.start->horizon(f.t[k]), f.F, dF);
+    benchmark::DoNotOptimize(dF.data());
+    benchmark::ClobberMemory();
+    ++k;
+  }
+  common_counters(state, c, f);
+}
+
 // the vector work of the ID residual's stages (Euler rollout, w = R u, costates, F_i) with the
 // RNEA and adjoint calls replaced by their stored outputs: with BM_RneaVjp it prices one stage
 void BM_StageVectorOps(benchmark::State& state, int n) {
@@ -301,6 +334,8 @@ void register_all() {
   for (const auto& [n, N, kmax] : cases) {
     for (const Controller& ctrl : kControllers) {
       if (!ctrl.simd_stages && !(N == 25 && kmax == 10)) continue;
+      const bool exact = ctrl.products == Products::kExact;
+      if (exact && !(N == 25 && kmax == 10 && n <= 16)) continue;
       if (ctrl.shooting == ShootingScheme::kMultiple && !paper.count({n, N, kmax})) continue;
       const Case c{ctrl, n, N, kmax};
       const std::string tag = ctrl.name() + "/n:" + std::to_string(n) + "/N:" + std::to_string(N);
@@ -308,7 +343,8 @@ void register_all() {
                                    BM_Update, c)
           ->Unit(benchmark::kMicrosecond);
       if (N == 25 && kmax == 10 && ctrl.shooting == ShootingScheme::kSingle) {  // same fixture, right after
-        benchmark::RegisterBenchmark(("BM_Residual/" + tag).c_str(), BM_Residual, c)
+        benchmark::RegisterBenchmark(((exact ? "BM_Product/" : "BM_Residual/") + tag).c_str(),
+                                     exact ? BM_Product : BM_Residual, c)
             ->Unit(benchmark::kMicrosecond);
       }
     }

@@ -95,6 +95,10 @@ void bind_control(py::module_& m) {
       .def_property(
           "shooting", [](const CgmresSettings& s) { return to_string(s.shooting); },
           [](CgmresSettings& s, const std::string& x) { s.shooting = parse_shooting(x); }, "\"single\" or \"multiple\"")
+      .def_property(
+          "products", [](const CgmresSettings& s) { return to_string(s.products); },
+          [](CgmresSettings& s, const std::string& x) { s.products = parse_products(x); },
+          "\"difference\" (forward differences, increment h) or \"exact\" (dual numbers)")
       .def_readwrite("Tf", &CgmresSettings::Tf, "horizon length T_f [s]")
       .def_readwrite("alpha", &CgmresSettings::alpha, "horizon growth rate: T(t) = T_f (1 - exp(-alpha t))")
       .def_readwrite("dt", &CgmresSettings::dt, "sampling period [s]")

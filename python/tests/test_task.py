@@ -135,6 +135,7 @@ FIELDS = {
     "N": ("cgmres", "N"), "kmax": ("cgmres", "kmax"), "Tf": ("cgmres", "Tf"), "alpha": ("cgmres", "alpha"),
     "dt": ("cgmres", "dt"), "zeta": ("cgmres", "zeta"), "h": ("cgmres", "h"),
     "init_full_horizon": ("cgmres", "init_full_horizon"), "shooting": ("cgmres", "shooting"),
+    "products": ("cgmres", "products"),
 }
 
 

@@ -40,6 +40,10 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
                      "single (rollout from the measured state) or multiple (states and costates as unknowns, "
                      "condensed)"),
       [](const Task& s, Task& d) { d.shooting = s.shooting; });
+  add(sub.add_option("--products", t.products,
+                     "difference (the paper's forward differences, increment --h) or exact (dual numbers) "
+                     "products of C/GMRES"),
+      [](const Task& s, Task& d) { d.products = s.products; });
   add(sub.add_option("--duration", t.duration, "simulated time [s]"),
       [](const Task& s, Task& d) { d.duration = s.duration; });
   add(sub.add_option("--q0", t.q0, "initial joint positions, one per joint"), [](const Task& s, Task& d) {

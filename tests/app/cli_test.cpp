@@ -354,7 +354,8 @@ const std::vector<BadInput>& bad_inputs() {
       // a problem not strictly convex in its decision variable
       {"--formulation fd --R 0", {"--R", "positive with FD"}},
       {"--R 0", {"--R and --Qa", "both 0"}},
-      {"--shooting double", {"shooting", "'double'", "single", "multiple"}}};
+      {"--shooting double", {"shooting", "'double'", "single", "multiple"}},
+      {"--products finite", {"--products (cgmres.products)", "'finite'", "difference", "exact"}}};
   return inputs;
 }
 
@@ -362,7 +363,7 @@ std::string bad_input_name(const ::testing::TestParamInfo<BadInput>& info) {
   static const std::vector<std::string> names = {"formulation", "derivatives", "N",  "kmax",      "dt",
                                                  "Qq",          "R",           "q0", "ball_joint",
                                                  "kmax_int_max", "kmax_above_dimension", "fd_R_zero",
-                                                 "id_R_and_Qa_zero", "shooting"};
+                                                 "id_R_and_Qa_zero", "shooting", "products"};
   return names.at(info.index);
 }
 

@@ -263,7 +263,7 @@ std::string RunSummary::label() const {
   std::transform(upper.begin(), upper.end(), upper.begin(),
                  [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
   return "C/GMRES (" + upper + ", " + task.derivatives + (task.shooting == "multiple" ? ", multiple shooting" : "") +
-         ") N=" + std::to_string(task.N) + " kmax=" + std::to_string(task.kmax);
+         (task.products == "exact" ? ", exact products" : "") + ") N=" + std::to_string(task.N) + " kmax=" + std::to_string(task.kmax);
 }
 
 namespace {

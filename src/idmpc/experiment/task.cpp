@@ -233,7 +233,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   }
   if (r.has("cgmres")) {
     const Reader c = r.sub("cgmres");
-    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h", "init_full_horizon", "shooting"});
+    c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h", "init_full_horizon", "shooting", "products"});
     c.get("N", t.N);
     c.get("kmax", t.kmax);
     c.get("Tf", t.Tf);
@@ -243,6 +243,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
     c.get("h", t.h);
     c.get("init_full_horizon", t.init_full_horizon);
     c.get("shooting", t.shooting);
+    c.get("products", t.products);
   }
   return t;
 }
@@ -281,6 +282,7 @@ const Task& arm_defaults() {
     t.h = 1e-8;
     t.init_full_horizon = true;
     t.shooting = "single";
+    t.products = "difference";
     return t;
   }();
   return task;
@@ -319,7 +321,7 @@ nlohmann::json to_json(const Task& t) {
                   {"Qa_fallback", t.Qa_fallback}};
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
                  {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon},
-                 {"shooting", t.shooting}};
+                 {"shooting", t.shooting}, {"products", t.products}};
   return j;
 }
 
@@ -328,6 +330,7 @@ ResolvedTask resolve(const Task& t, int n) {
   const std::pair<const std::string&, const char*> words[] = {{t.formulation, "--formulation (formulation)"},
                                                               {t.derivatives, "--derivatives (derivatives)"},
                                                               {t.shooting, "--shooting (cgmres.shooting)"},
+                                                              {t.products, "--products (cgmres.products)"},
                                                               {t.implicit_damping, "--implicit-damping (implicit_damping)"}};
   for (const auto& [word, name] : words) {
     if (word.size() > kMaxShownChars) throw std::invalid_argument(std::string(name) + ": unknown value '" + abbreviate(word) + "'");
@@ -417,6 +420,11 @@ ResolvedTask resolve(const Task& t, int n) {
   r.cgmres.h = t.h;
   r.cgmres.init_full_horizon = t.init_full_horizon;
   r.cgmres.shooting = parse_shooting(t.shooting);
+  try {
+    r.cgmres.products = parse_products(t.products);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--products (cgmres.products): ") + e.what());
+  }
   r.cgmres.validate();
   if (t.implicit_damping != "on" && t.implicit_damping != "off" && t.implicit_damping != "auto") {
     throw std::invalid_argument("--implicit-damping (implicit_damping): expected on, off or auto, got '" +

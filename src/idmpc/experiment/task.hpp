@@ -99,6 +99,7 @@ struct Task {
   double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
   bool init_full_horizon = false;
   std::string shooting;  ///< "single" or "multiple"
+  std::string products;  ///< "difference" or "exact" (DESIGN §11)
 };
 
 /// @brief The paper's swing-up task file, mjcf/paper_swingup.json of the data directory

@@ -47,6 +47,7 @@ Shooting::Shooting(OcpProblem problem) : problem_(std::move(problem)) {
   d_ = MatX<double>::Zero(problem_.m(), N);
   rho_ = MatX<double>::Zero(problem_.m(), N);
   for (Vec* x : {&hq_, &hv_, &phi_q_, &phi_v_}) *x = Vec::Zero(n);
+  if (problem_.dual_reserved()) enable_exact_products();
 }
 
 template <typename S> void Shooting::unpack(Sweep<S>& x, const Eigen::Ref<const VecX<S>>& U, int stages) const {

@@ -107,7 +107,7 @@ class Shooting {
   const ShootingTrajectory& trajectory_tangent() const { return dx_; }
   /// @brief Sizes what residual_and_product needs (dual-number stage workspaces and trajectories).
   void enable_exact_products();
-  bool exact_products() const { return problem_.dual_reserved(); }
+  bool exact_products() const { return dual_.F.size() > 0; }
 
   /// @brief Multiple shooting: F_U (size dim) and the defects of the stored states and costates
   /// `at` (columns 1 … N) with x_0 = (q0, v0) measured, horizon T. Every stage is evaluated at
