@@ -587,6 +587,49 @@ TEST_P(OcpGradient, WithAFrameTargetAndMovingReferencesResidualIsTheGradient) {
 }
 
 // set_disturbance takes n finite values
+// the task's stage cost that closed loops integrate (StageTerms::stage_cost): its gradients are
+// the ones the residual is built from (state_gradient, and R(u − u_ref) without limits), and it
+// vanishes at the target (the frame at its pose, at rest, holding torque)
+TEST(StageCost, GradientsOfTheValueAreTheStageGradientsAndTheTargetCostsNothing) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/panda.xml");
+  const int n = p.model.n;
+  std::mt19937 rng(4);
+  const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2), VecX<double>::Zero(n),
+                     random_vector(rng, n, 1e-3, 1e-2)};
+  const VecX<double> q_ref = random_vector(rng, n, 1.0);
+  StageTerms terms(std::make_shared<const Model>(p.model), QuadraticCost(w, q_ref, n), TorqueLimits{}, 4, false);
+  FrameTarget target;
+  target.frame = Frame{"flange", n - 1, Transform<double>{}};
+  target.position_weight = random_vector(rng, 3, 2.0, 8.0);
+  target.orientation_weight = 3.0;
+  FrameKinematics<double> fk(p.model, target.frame);
+  fk.compute(p.model, q_ref);
+  target.position = fk.position();
+  target.rotation = fk.rotation();
+  terms.set_frame_target(target);
+  const VecX<double> zero = VecX<double>::Zero(n);
+  EXPECT_NEAR(terms.stage_cost(1, q_ref, zero, terms.u_ref(1)), 0.0, 1e-14);
+
+  const VecX<double> q = random_vector(rng, n, 1.0), v = random_vector(rng, n, 1.0), u = random_vector(rng, n, 5.0);
+  VecX<double> L_q(n), L_v(n);
+  terms.state_gradient(1, q, v, L_q, L_v);
+  const VecX<double> L_u = w.R.cwiseProduct(u - terms.u_ref(1));
+  auto gradient = [&](int which) {
+    VecX<double> g(n);
+    const double h = 1e-6;
+    for (int j = 0; j < n; ++j) {
+      VecX<double> x[3] = {q, v, u}, y[3] = {q, v, u};
+      x[which][j] += h;
+      y[which][j] -= h;
+      g[j] = (terms.stage_cost(1, x[0], x[1], x[2]) - terms.stage_cost(1, y[0], y[1], y[2])) / (2 * h);
+    }
+    return g;
+  };
+  EXPECT_LE((gradient(0) - L_q).norm(), 1e-7 * (1 + L_q.norm()));
+  EXPECT_LE((gradient(1) - L_v).norm(), 1e-7 * (1 + L_v.norm()));
+  EXPECT_LE((gradient(2) - L_u).norm(), 1e-7 * (1 + L_u.norm()));
+}
+
 TEST(OcpDisturbance, RefusesWrongSizeAndNonFiniteValues) {
   const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
   const int n = p.model.n;

@@ -330,6 +330,7 @@ nlohmann::json to_json(const RunSummary& s) {
   j["final_q_error"] = s.final_q_error;
   j["final_v_norm"] = s.final_v_norm;
   j["mean_residual"] = s.mean_residual;
+  j["closed_loop_cost"] = s.closed_loop_cost;
   j["reached"] = s.reached;
   if (s.tracking) {
     const TrackingResult& r = *s.tracking;
@@ -405,6 +406,9 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.final_q_error = j.at("final_q_error").get<double>();
     s.final_v_norm = j.at("final_v_norm").get<double>();
     s.mean_residual = j.at("mean_residual").get<double>();
+    if (j.contains("closed_loop_cost") && j.at("closed_loop_cost").is_number()) {
+      s.closed_loop_cost = j.at("closed_loop_cost").get<double>();
+    }
     // absent in summaries written before they existed
     s.reached = j.value("reached", false);
     if (j.contains("tracking")) {

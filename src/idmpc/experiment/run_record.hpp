@@ -66,6 +66,8 @@ struct RunSummary {
   double rollout_ms = 0, costate_ms = 0, gmres_ms = 0;  ///< mean per update
   int evaluations_per_update = 0;
   double init_residual = 0, final_q_error = 0, final_v_norm = 0, mean_residual = 0;
+  /// @brief ∫ L dt of the task's stage cost along the run (NaN in summaries written without it)
+  double closed_loop_cost = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> torque_lower, torque_upper;  ///< limits the plant's torques were held to
   std::vector<long> saturated_steps;               ///< per joint: steps clamped to a limit
   long saturated_any = 0;                          ///< steps with any joint clamped

@@ -158,6 +158,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
         if (slot < kept) result.update_ms[static_cast<size_t>(slot)] = ms;
       }
       residual_sum += controller.residual_norm();
+      result.closed_loop_cost += dt * controller.stage_cost(q, v, tau);
       result.max_constraint_violation = std::max(result.max_constraint_violation, controller.constraint_violation());
       const UpdateTimes& ph = controller.solver().last_times();
       phase_sum.total += ph.total;

@@ -73,6 +73,9 @@ struct RunResult {
   double max_update_ms = 0;         ///< over all of them (exact)
   double init_residual = 0;         ///< ‖F_0‖ after the zero-horizon Newton solve
   double mean_residual = 0;
+  /// @brief ∫ L dt of the task's stage cost (Controller::stage_cost) along the measured
+  /// trajectory and the applied torques, Σ L(q_k, v_k, τ_k)·Δt over the successful updates
+  double closed_loop_cost = 0;
   int evaluations_per_update = 0;   ///< F evaluations in one update
   UpdateTimes mean_phase_ms;        ///< mean of each phase [ms]
   VecX<double> final_q, final_v;

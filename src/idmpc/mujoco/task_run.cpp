@@ -177,6 +177,7 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.final_q_error = result.final_q_error;
   s.final_v_norm = result.final_v_norm;
   s.mean_residual = result.mean_residual;
+  s.closed_loop_cost = result.closed_loop_cost;
   s.unmodeled = imported_.unmodeled;
   s.notices = notices_;
   s.warnings = warnings_;

@@ -154,6 +154,9 @@ class OcpProblem {
     stages_->hamiltonian(terms_, ev, i, q, v, a, u, d, rho, lmd_next, gmm_next, hq, hv, F, state);
   }
 
+  /// @brief StageTerms::stage_cost of stage i at its references of the last evaluation.
+  double stage_cost(int i, In q, In v, In u) const { return terms_.stage_cost(i, q, v, u); }
+
   /// @brief Terminal costates λ_N = ∂φ/∂q, γ_N = ∂φ/∂v (eqs. 16, 18) at the end of a horizon of
   /// `stages` stages (its references are those of stage `stages`).
   void terminal_costate(int stages, In q, In v, Out lmd, Out gmm) const {

@@ -186,6 +186,20 @@ void StageTerms::update_frame_references() {
   }
 }
 
+double StageTerms::stage_cost(int i, In q, In v, In u) const {
+  const OcpWeights& w = cost_.weights();
+  auto quadratic = [](const auto& e, const VecX<double>& W) { return 0.5 * e.dot(W.cwiseProduct(e)); };
+  double L = quadratic(q - q_ref_.col(i), w.Qq) + quadratic(v - v_ref_.col(i), w.Qv) +
+             quadratic(u - u_ref_.col(i), w.R);
+  if (!frame_) return L;
+  FrameKinematics<double>& fk = *frame_double_.kinematics;
+  fk.compute(*model_, q);
+  const Vec3<double> e = fk.position() - p_ref_.col(i);
+  // w_o(1 − cos θ), cos θ = (tr(R_refᵀR) − 1)/2
+  const double cos_theta = 0.5 * ((frame_->rotation.transpose() * fk.rotation()).trace() - 1);
+  return L + quadratic(e, frame_->position_weight) + frame_->orientation_weight * (1 - cos_theta);
+}
+
 template <typename S>
 void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v) const {
   const VecX<double>& Qq = cost_.weights().Qq;

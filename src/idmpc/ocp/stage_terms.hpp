@@ -120,6 +120,11 @@ class StageTerms {
     state_gradient_of<Dual>(i, q, v, L_q, L_v);
   }
 
+  /// @brief The value of stage i's cost without its acceleration term, the task's stage cost:
+  /// ½(q − q_ref,i)ᵀQ_q(·) + ½(v − v_ref,i)ᵀQ_v(·) + ½(u − u_ref,i)ᵀR(·) + φ_frame(q) (cost.hpp).
+  /// What a closed loop accumulates along its measured trajectory; allocation-free.
+  double stage_cost(int i, In q, In v, In u) const;
+
   /// @brief The rest of stage i's block F_i once its first n rows hold ∂H/∂input: ∂H/∂d =
   /// −r_d + 2s∘ρ∘d and ∂H/∂ρ = s∘c; with `state` also hq = ∂L/∂q + gq and hv = ∂L/∂v + λ_{i+1}
   /// + gv (the Euler step q_{i+1} = q_i + Δτ v_i), for the dynamics' parts gq, gv of ∂H/∂q, ∂H/∂v.

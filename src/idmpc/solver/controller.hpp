@@ -126,6 +126,10 @@ class Controller {
   const Vec& applied_acceleration() const { return a0_hat_; }
   const std::string& failure() const { return failure_; }
   double residual_norm() const { return solver_.residual_norm(); }
+  /// @brief The task's stage cost (StageTerms::stage_cost) of a measured state and the torque
+  /// applied from it, at the references of the last update's time: what a closed loop
+  /// integrates to compare controllers by their outcome.
+  double stage_cost(In q, In v, In u) const { return nlp_.problem().stage_cost(0, q, v, u); }
   /// @brief Cgmres::constraint_violation of the last update [N m].
   double constraint_violation() const { return solver_.constraint_violation(); }
 
