@@ -975,8 +975,11 @@ void merge(const SweepOptions& opt) {
                                 " cells have no record in '" + opt.out_dir + "/cells' (run them with --cell ID): " +
                                 ids);
   }
-  static const std::regex temporaries(R"(\.(?:sweep|arms|tracking)\.(?:csv|md)\.tmp\.([0-9]+)\.[0-9]+)");
-  remove_stale_temporaries(opt.out_dir, temporaries);
+  // the temporaries killed runs left: of the tables, and of the records of cells that ran again
+  static const std::regex table_temporaries(R"(\.(?:sweep|arms|tracking)\.(?:csv|md)\.tmp\.([0-9]+)\.[0-9]+)");
+  static const std::regex record_temporaries(R"(\.[0-9a-f]{16}\.csv\.tmp\.([0-9]+)\.[0-9]+)");
+  remove_stale_temporaries(opt.out_dir, table_temporaries);
+  remove_stale_temporaries(opt.out_dir + "/cells", record_temporaries);
   read_finished(s.csv, s.cells);  // a table of another sweep is refused, never overwritten
   write_csv(s, done);
   write_markdown(s, done);

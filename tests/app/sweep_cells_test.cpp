@@ -4,17 +4,21 @@
 #include <gtest/gtest.h>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/file.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "support/command.hpp"
@@ -239,6 +243,60 @@ TEST_F(SweepCells, AMergeNamesTheMissingCells) {
   expect_error(idmpc(sweep + " --cell " + ids.back()), {"another sweep is writing into 'out'"});
   ::close(fd);
   expect_no_temporaries();
+}
+
+// a cell interrupted by a signal leaves neither its record nor a temporary of it
+TEST_F(SweepCells, AnInterruptedCellLeavesNoFile) {
+  // chain32 FD, 5 s simulated: it runs for many seconds, long enough to be interrupted
+  const std::string sweep = "sweep --tables 3 --duration 5 --out out";
+  const std::vector<std::string> ids = cell_ids(sweep);
+  ASSERT_EQ(ids.size(), 8u);
+  const std::string id = ids[6];
+  const pid_t pid = test::start_command("cd " + quote(dir_.string()) + " && ulimit -c 0 && exec " + quote(kBinary) +
+                                        " " + sweep + " --cell " + id + " 2> .stderr");
+  ASSERT_GE(pid, 0);
+  // the record's temporary exists from the start of the run
+  const fs::path cells = dir_ / "out" / "cells";
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  bool temporary = false;
+  while (!temporary && std::chrono::steady_clock::now() < deadline) {
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(cells, ec)) temporary |= e.path().filename().string().find(".tmp.") != std::string::npos;
+    if (!temporary) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(temporary) << "the cell never created its record's temporary: " << slurp(dir_ / ".stderr");
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << "status " << status;
+  fs::remove(dir_ / ".stderr");
+  EXPECT_TRUE(fs::is_empty(cells)) << "no record, no temporary";
+}
+
+// the temporaries that killed cell runs left (their process gone): a cell run again removes its
+// own, beside which other cells may be writing theirs; the merge, which runs alone, the rest
+TEST_F(SweepCells, StaleTemporariesOfKilledCellsAreRemoved) {
+  const pid_t dead = ::fork();
+  ASSERT_GE(dead, 0);
+  if (dead == 0) ::_exit(0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string sweep = "sweep --tables 3 --duration 0.01 --out out";
+  const std::vector<std::string> ids = cell_ids(sweep);
+  ASSERT_EQ(ids.size(), 8u);
+  const fs::path cells = dir_ / "out" / "cells";
+  fs::create_directories(cells);
+  const std::string mine = "." + ids[0] + ".csv.tmp." + std::to_string(dead) + ".0";
+  const std::string other = "." + ids[1] + ".csv.tmp." + std::to_string(dead) + ".0";
+  const std::string alive = "." + ids[2] + ".csv.tmp." + std::to_string(::getpid()) + ".0";
+  for (const std::string& name : {mine, other, alive}) std::ofstream(cells / name) << "half";
+  ASSERT_EQ(idmpc(sweep + " --cell " + ids[0]).code, 0);
+  EXPECT_FALSE(fs::exists(cells / mine));
+  EXPECT_TRUE(fs::exists(cells / other)) << "another cell's, left to it or to the merge";
+  for (size_t k = 1; k < ids.size(); ++k) ASSERT_EQ(idmpc(sweep + " --cell " + ids[k]).code, 0) << ids[k];
+  const Result merged = idmpc(sweep + " --merge");
+  ASSERT_EQ(merged.code, 0) << merged.err;
+  EXPECT_FALSE(fs::exists(cells / other));
+  EXPECT_TRUE(fs::exists(cells / alive)) << "a live process's temporary is kept";
 }
 
 }  // namespace
