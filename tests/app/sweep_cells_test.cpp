@@ -274,7 +274,7 @@ TEST_F(SweepCells, AnInterruptedCellLeavesNoFile) {
 }
 
 // the temporaries that killed cell runs left (their process gone): a cell run again removes its
-// own, beside which other cells may be writing theirs; the merge, which runs alone, the rest
+// own (other cells may be writing theirs beside it); the merge, which runs alone, every one
 TEST_F(SweepCells, StaleTemporariesOfKilledCellsAreRemoved) {
   const pid_t dead = ::fork();
   ASSERT_GE(dead, 0);
@@ -293,9 +293,13 @@ TEST_F(SweepCells, StaleTemporariesOfKilledCellsAreRemoved) {
   EXPECT_FALSE(fs::exists(cells / mine));
   EXPECT_TRUE(fs::exists(cells / other)) << "another cell's, left to it or to the merge";
   for (size_t k = 1; k < ids.size(); ++k) ASSERT_EQ(idmpc(sweep + " --cell " + ids[k]).code, 0) << ids[k];
+  EXPECT_FALSE(fs::exists(cells / other)) << "its cell ran";
+  // a second run of a cell killed after the first had written its record
+  const std::string again = "." + ids[3] + ".csv.tmp." + std::to_string(dead) + ".1";
+  std::ofstream(cells / again) << "half";
   const Result merged = idmpc(sweep + " --merge");
   ASSERT_EQ(merged.code, 0) << merged.err;
-  EXPECT_FALSE(fs::exists(cells / other));
+  EXPECT_FALSE(fs::exists(cells / again));
   EXPECT_TRUE(fs::exists(cells / alive)) << "a live process's temporary is kept";
 }
 
