@@ -845,12 +845,15 @@ void write_markdown(const Sweep& s, const std::map<std::string, CellResult>& don
 
 // the outcome of a cell as its progress line says it
 std::string outcome(const CellResult& r) {
+  std::string what = "ok";
+  if (r.diverged) {
+    what = "diverged at " + fmt(r.diverged_at) + " s";
+  } else if (task_table(r.cell.table)) {
+    what = r.reached ? "reached the target" : "did not reach the target";
+  }
   char ms[32];
   std::snprintf(ms, sizeof ms, "%.4g", r.mean_ms);
-  return std::string(ms) + " ms per update, " +
-         (r.diverged              ? "diverged at " + fmt(r.diverged_at) + " s"
-          : task_table(r.cell.table) ? (r.reached ? "reached the target" : "did not reach the target")
-                                   : std::string("ok"));
+  return std::string(ms) + " ms per update, " + what;
 }
 
 // the sweep, one cell after the other, into sweep.csv and sweep.md
