@@ -130,11 +130,16 @@ TEST_F(SweepCells, ListsEachCellOnceWithAStableId) {
   }
   EXPECT_EQ(ids.size(), 8u);
   EXPECT_FALSE(fs::exists(dir_ / "out")) << "--list-cells writes nothing";
-  // the same options give the same IDs, wherever the sweep writes; other settings other IDs
+  // the same options give the same IDs, wherever the sweep writes, and on another installation
+  // of the same files (another data directory, as on another machine); other settings other IDs
   EXPECT_EQ(idmpc(kSweep + " --out elsewhere --list-cells").out, r.out);
+  fs::create_directories(dir_ / "installed");
+  fs::copy(IDMPC_SOURCE_DIR "/mjcf", dir_ / "installed" / "mjcf", fs::copy_options::recursive);
+  EXPECT_EQ(idmpc(kSweep + " --data-dir installed --out out --list-cells").out, r.out);
   const std::vector<std::string> longer = cell_ids("sweep --tables 3 --duration 0.03");
   ASSERT_EQ(longer.size(), 8u);
   for (const std::string& id : longer) EXPECT_FALSE(ids.count(id)) << id;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 
 // the cells run through GNU parallel, two at a time, and merged give the serial sweep's tables.
