@@ -1032,7 +1032,8 @@ void register_sweep(CLI::App& app) {
                                     "run nothing");
   CLI::Option* one = sub->add_option("--cell", *cell,
                                      "run only the cell with this ID (see --list-cells) into its record, "
-                                     "cells/ID.csv of --out; cells run side by side");
+                                     "cells/ID.csv of --out; cells run side by side")
+                         ->type_name("ID");
   CLI::Option* merged = sub->add_flag("--merge",
                                       "write the tables (sweep.csv and sweep.md) from the cells' records, as the "
                                       "serial sweep writes them; a cell without a record is an error naming it");
