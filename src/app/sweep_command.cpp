@@ -61,6 +61,8 @@ struct Cell {
   int n = 0, N = 0, kmax = 0;
   std::string settings;      // hash of everything else the cell runs with (the task as run)
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
+  // the resume key: every axis and setting the cell runs with. A cell's ID (--list-cells, --cell)
+  // is its hash, so an axis added here reaches the cell runs with no other change.
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
            (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" + settings;
