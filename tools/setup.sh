@@ -4,7 +4,7 @@
 set -euo pipefail
 pkgs=(build-essential cmake libmujoco-dev libtinyxml2-dev libqhull-dev libeigen3-dev libcli11-dev
       nlohmann-json3-dev libgtest-dev libbenchmark-dev libosmesa6-dev ffmpeg python3-matplotlib
-      pybind11-dev python3-dev python3-numpy python3-pytest "$@")
+      pybind11-dev python3-dev python3-numpy python3-pytest parallel "$@")
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

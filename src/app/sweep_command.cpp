@@ -1,29 +1,24 @@
 // idmpc sweep: the paper's closed-loop grids (Tables 1–3), resumable, with our figures beside
 // the paper's.
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
-
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/file.h>
-#include <unistd.h>
 
 #include "app/atomic_file.hpp"
 #include "app/commands.hpp"
 #include "app/data_dir_option.hpp"
 #include "app/number_options.hpp"
 #include "app/output_paths.hpp"
+#include "app/sweep_cells.hpp"
 #include "app/swingup.hpp"
 #include "idmpc/experiment/data_dir.hpp"
 #include "idmpc/experiment/input_file.hpp"
@@ -66,6 +61,8 @@ struct Cell {
   int n = 0, N = 0, kmax = 0;
   std::string settings;      // hash of everything else the cell runs with (the task as run)
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
+  // the resume key: every axis and setting the cell runs with. A cell's ID (--list-cells, --cell)
+  // is its hash, so an axis added here reaches the cell runs with no other change.
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
            (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" + settings;
@@ -793,100 +790,205 @@ std::string cell_label(const Cell& c) {
          " N=" + std::to_string(c.N) + " kmax=" + std::to_string(c.kmax);
 }
 
-// the temporaries of a sweep killed before it could remove them (AtomicFile's
-// `.<name>.tmp.<pid>.<k>` of the tables and the logs) whose process is gone; called with the
-// directory locked, so no other sweep is writing there
-void remove_stale_temporaries(const std::string& dir) {
-  static const std::regex pattern(R"(\.?(?:(?:sweep|arms|tracking)\.(?:csv|md)|log_.*)\.tmp\.([0-9]+)\.[0-9]+)");
-  std::error_code ec;
-  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    std::smatch m;
-    if (!std::regex_match(name, m, pattern) || !entry.is_regular_file(ec)) continue;
-    const long pid = std::strtol(m[1].str().c_str(), nullptr, 10);
-    const bool gone = pid > 0 && pid != ::getpid() && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
-    if (gone) std::filesystem::remove(entry.path(), ec);
-  }
-}
+// a sweep of the chosen options: the grid, each cell keyed, and what its cells run on
+struct Sweep {
+  SweepOptions opt;
+  PaperTables tables;
+  Task base;
+  std::vector<Cell> cells;
+  std::string csv, md;  // the tables' files
+};
 
-void run(const SweepOptions& opt) {
+Sweep sweep_of(const SweepOptions& opt) {
   namespace fs = std::filesystem;
   if (!(opt.duration > 0)) throw std::invalid_argument("--duration must be positive");
-  const PaperTables tables = load_paper_tables();
-  const Task base = load_task(tables.task);
-  const std::vector<Cell> cells = grid(opt, tables, base);
-  for (const Cell& c : cells) {
+  Sweep s{opt, load_paper_tables(), {}, {}, "", ""};
+  s.base = load_task(s.tables.task);
+  s.cells = grid(opt, s.tables, s.base);
+  std::set<std::string> ids;
+  for (const Cell& c : s.cells) {
     if (!fs::exists(cell_file(opt, c))) {
       throw std::invalid_argument("'" + cell_file(opt, c) + "' not found (see --models)");
     }
-  }
-  // every cell's settings are checked before any file is made (e.g. a --duration of no step)
-  for (const Cell& c : cells) {
-    try {
-      const mj::TaskRun check(cell_task(base, c, opt));
-    } catch (const std::exception& e) {
-      throw std::invalid_argument("cell " + cell_label(c) + " cannot run: " + e.what());
+    if (!ids.insert(cell_id(c.key())).second) {
+      throw std::logic_error("two cells of the sweep have the ID " + cell_id(c.key()));
     }
   }
-  fs::create_directories(opt.out_dir);
   const std::string stem = opt.out_dir + (task_table(opt.tables) ? "/" + opt.tables : std::string("/sweep"));
-  const std::string csv = stem + ".csv", md = stem + ".md";
-  // one sweep at a time in a directory: the lock goes with the process, however it ends
-  const int dir_fd = ::open(opt.out_dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-  if (dir_fd < 0) throw std::runtime_error("cannot open --out '" + opt.out_dir + "': " + std::strerror(errno));
-  struct Unlock {
-    int fd;
-    ~Unlock() { ::close(fd); }
-  } unlock{dir_fd};
-  if (::flock(dir_fd, LOCK_EX | LOCK_NB) != 0) {
-    throw std::runtime_error("another sweep is writing into '" + opt.out_dir + "' (it is locked); wait for it or use another --out");
+  s.csv = stem + ".csv";
+  s.md = stem + ".md";
+  return s;
+}
+
+// a cell's settings are checked before any file is made (e.g. a --duration of no step)
+void check_cell(const Sweep& s, const Cell& c) {
+  try {
+    const mj::TaskRun check(cell_task(s.base, c, s.opt));
+  } catch (const std::exception& e) {
+    throw std::invalid_argument("cell " + cell_label(c) + " cannot run: " + e.what());
   }
-  remove_stale_temporaries(opt.out_dir);
-  std::map<std::string, CellResult> done = read_finished(csv, cells);
+}
+
+void write_csv(const Sweep& s, const std::map<std::string, CellResult>& done) {
+  AtomicFile f(s.csv);
+  f.stream() << csv_header() << '\n';
+  for (const Cell& c : s.cells) {
+    const auto it = done.find(c.key());
+    if (it != done.end()) f.stream() << csv_row(s.tables, it->second) << '\n';
+  }
+  f.commit();
+}
+
+void write_markdown(const Sweep& s, const std::map<std::string, CellResult>& done) {
+  AtomicFile f(s.md);
+  f.stream() << markdown(s.tables, s.cells, done, s.opt);
+  f.commit();
+}
+
+// the outcome of a cell as its progress line says it
+std::string outcome(const CellResult& r) {
+  std::string what = "ok";
+  if (r.diverged) {
+    what = "diverged at " + fmt(r.diverged_at) + " s";
+  } else if (task_table(r.cell.table)) {
+    what = r.reached ? "reached the target" : "did not reach the target";
+  }
+  char ms[32];
+  std::snprintf(ms, sizeof ms, "%.4g", r.mean_ms);
+  return std::string(ms) + " ms per update, " + what;
+}
+
+// the sweep, one cell after the other, into sweep.csv and sweep.md
+void run_serial(const SweepOptions& opt) {
+  namespace fs = std::filesystem;
+  const Sweep s = sweep_of(opt);
+  for (const Cell& c : s.cells) check_cell(s, c);
+  fs::create_directories(opt.out_dir);
+  // one sweep at a time in a directory: the lock goes with the process, however it ends
+  const OutputDirectoryLock lock(opt.out_dir, OutputDirectoryLock::Mode::exclusive);
+  // the temporaries of a sweep killed before it could remove them (of the tables and the logs);
+  // the directory is locked, so no other sweep is writing there
+  static const std::regex temporaries(R"(\.?(?:(?:sweep|arms|tracking)\.(?:csv|md)|log_.*)\.tmp\.([0-9]+)\.[0-9]+)");
+  remove_stale_temporaries(opt.out_dir, temporaries);
+  std::map<std::string, CellResult> done = read_finished(s.csv, s.cells);
 
   // rewrite the finished cells cleanly, then append each new cell as soon as it ends
-  {
-    AtomicFile f(csv);
-    f.stream() << csv_header() << '\n';
-    for (const Cell& c : cells) {
-      const auto it = done.find(c.key());
-      if (it != done.end()) f.stream() << csv_row(tables, it->second) << '\n';
-    }
-    f.commit();
-  }
+  write_csv(s, done);
   // each finished cell is one whole row, synced before the next cell starts; a row that cannot
   // be written (a full disk, a file size limit) ends the sweep with the rows before it kept
-  AppendFile append(csv);
+  AppendFile append(s.csv);
   int index = 0;
-  for (const Cell& c : cells) {
+  for (const Cell& c : s.cells) {
     ++index;
-    const bool arm = task_table(c.table);
-    std::fprintf(stderr, "[%d/%zu] %s: ", index, cells.size(), cell_label(c).c_str());
+    std::fprintf(stderr, "[%d/%zu] %s: ", index, s.cells.size(), cell_label(c).c_str());
     if (done.count(c.key())) {
       std::fprintf(stderr, "done earlier\n");
       continue;
     }
     CellResult r;
     try {
-      r = run_cell(base, c, opt);
+      r = run_cell(s.base, c, opt);
     } catch (...) {
       std::fputc('\n', stderr);  // the error goes on a line of its own
       throw;
     }
-    const std::string outcome = r.diverged ? "diverged at " + fmt(r.diverged_at) + " s"
-                                : arm      ? (r.reached ? "reached the target" : "did not reach the target")
-                                           : "ok";
-    std::fprintf(stderr, "%.4g ms per update, %s\n", r.mean_ms, outcome.c_str());
-    append.append(csv_row(tables, r) + "\n");
+    std::fprintf(stderr, "%s\n", outcome(r).c_str());
+    append.append(csv_row(s.tables, r) + "\n");
     done[c.key()] = r;
-    AtomicFile f(md);
-    f.stream() << markdown(tables, cells, done, opt);
-    f.commit();
+    write_markdown(s, done);
   }
-  AtomicFile f(md);
-  f.stream() << markdown(tables, cells, done, opt);
+  write_markdown(s, done);
+  std::cout << markdown(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
+}
+
+// the cell a run names by its ID
+const Cell& cell_named(const Sweep& s, const std::string& id) {
+  for (const Cell& c : s.cells) {
+    if (cell_id(c.key()) == id) return c;
+  }
+  throw std::invalid_argument("--cell '" + abbreviate(id) + "': no cell of this sweep has that ID (the IDs depend on "
+                              "every option; list them with the same options and --list-cells)");
+}
+
+// --list-cells: each cell's ID and what it runs, one line each, tab-separated
+void list_cells(const SweepOptions& opt) {
+  const Sweep s = sweep_of(opt);
+  for (const Cell& c : s.cells) check_cell(s, c);
+  for (const Cell& c : s.cells) std::cout << cell_id(c.key()) << "\ttable " << c.table << ": " << cell_label(c) << '\n';
+}
+
+// the record of a cell, if a run wrote it
+std::optional<CellResult> read_record(const Sweep& s, const Cell& c) {
+  const std::string path = cell_record_path(s.opt.out_dir, cell_id(c.key()));
+  if (!std::filesystem::exists(path)) return std::nullopt;
+  const std::map<std::string, CellResult> records = read_finished(path, s.cells);
+  const auto it = records.find(c.key());
+  if (it == records.end()) return std::nullopt;
+  return it->second;
+}
+
+// --cell ID: that cell alone, into its own record; cells of one sweep run side by side
+void run_one_cell(const SweepOptions& opt, const std::string& id) {
+  namespace fs = std::filesystem;
+  const Sweep s = sweep_of(opt);
+  const Cell& c = cell_named(s, id);
+  check_cell(s, c);
+  const std::string record = cell_record_path(opt.out_dir, id);
+  fs::create_directories(fs::path(record).parent_path());
+  const OutputDirectoryLock lock(opt.out_dir, OutputDirectoryLock::Mode::shared);
+  std::fprintf(stderr, "[cell %s] %s: ", id.c_str(), cell_label(c).c_str());
+  if (read_record(s, c)) {
+    std::fprintf(stderr, "done earlier\n");
+    return;
+  }
+  // the temporaries of this cell's record that a killed run of it left (other cells may be
+  // writing theirs beside them)
+  remove_stale_temporaries(fs::path(record).parent_path().string(),
+                           std::regex("\\." + id + "\\.csv\\.tmp\\.([0-9]+)\\.[0-9]+"));
+  AtomicFile f(record);  // an unwritable directory fails before the run
+  CellResult r;
+  try {
+    r = run_cell(s.base, c, opt);
+  } catch (...) {
+    std::fputc('\n', stderr);  // the error goes on a line of its own
+    throw;
+  }
+  f.stream() << csv_header() << '\n' << csv_row(s.tables, r) << '\n';
   f.commit();
-  std::cout << markdown(tables, cells, done, opt) << "\nwritten: " << md << ", " << csv << "\n";
+  std::fprintf(stderr, "%s\n", outcome(r).c_str());
+}
+
+// --merge: the tables of the serial sweep, from the cells' records; every cell must have one
+void merge(const SweepOptions& opt) {
+  const Sweep s = sweep_of(opt);
+  // a merge does not run beside cells of this host (they would be reported missing) or a sweep
+  std::optional<OutputDirectoryLock> lock;
+  if (std::filesystem::is_directory(opt.out_dir)) lock.emplace(opt.out_dir, OutputDirectoryLock::Mode::exclusive);
+  std::map<std::string, CellResult> done;
+  std::vector<std::string> missing;
+  for (const Cell& c : s.cells) {
+    if (std::optional<CellResult> r = read_record(s, c)) {
+      done[c.key()] = *r;
+    } else {
+      missing.push_back(cell_id(c.key()));
+    }
+  }
+  if (!missing.empty()) {
+    std::string ids;
+    for (const std::string& id : missing) ids += (ids.empty() ? "" : " ") + id;
+    throw std::invalid_argument(std::to_string(missing.size()) + " of " + std::to_string(s.cells.size()) +
+                                " cells have no record in '" + opt.out_dir + "/cells' (run them with --cell ID): " +
+                                ids);
+  }
+  // the temporaries killed runs left: of the tables, and of the records of cells that ran again
+  static const std::regex table_temporaries(R"(\.(?:sweep|arms|tracking)\.(?:csv|md)\.tmp\.([0-9]+)\.[0-9]+)");
+  static const std::regex record_temporaries(R"(\.[0-9a-f]{16}\.csv\.tmp\.([0-9]+)\.[0-9]+)");
+  remove_stale_temporaries(opt.out_dir, table_temporaries);
+  remove_stale_temporaries(opt.out_dir + "/cells", record_temporaries);
+  read_finished(s.csv, s.cells);  // a table of another sweep is refused, never overwritten
+  write_csv(s, done);
+  write_markdown(s, done);
+  std::cout << markdown(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
 }
 
 }  // namespace
@@ -925,11 +1027,33 @@ void register_sweep(CLI::App& app) {
   sub->add_flag("!--no-simd-stages", opt->simd_stages,
                 "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "
                 "the paper's arithmetic");
+  // the sweep as independent cells, for a scheduler (GNU parallel, a SLURM job array)
+  auto cell = std::make_shared<std::string>();
+  CLI::Option* list = sub->add_flag("--list-cells",
+                                    "print each cell's ID and what it runs, tab-separated, one line per cell, and "
+                                    "run nothing");
+  CLI::Option* one = sub->add_option("--cell", *cell,
+                                     "run only the cell with this ID (see --list-cells) into its record, "
+                                     "cells/ID.csv of --out; cells run side by side")
+                         ->type_name("ID");
+  CLI::Option* merged = sub->add_flag("--merge",
+                                      "write the tables (sweep.csv and sweep.md) from the cells' records, as the "
+                                      "serial sweep writes them; a cell without a record is an error naming it");
+  list->excludes(one)->excludes(merged);
+  one->excludes(merged);
   require_decimal_numbers(*sub);
-  sub->callback([opt, duration, tables, arms_tasks] {
+  sub->callback([opt, duration, tables, arms_tasks, list, one, merged, cell] {
     opt->duration_given = duration->count() > 0;
     if (arms_tasks->count() > 0 && tables->count() == 0) opt->tables = kArmsTable;
-    run(*opt);
+    if (list->count() > 0) {
+      list_cells(*opt);
+    } else if (one->count() > 0) {
+      run_one_cell(*opt, *cell);
+    } else if (merged->count() > 0) {
+      merge(*opt);
+    } else {
+      run_serial(*opt);
+    }
   });
 }
 
