@@ -35,6 +35,7 @@ struct SweepOptions {
   std::string offset_free = "task";  // arms: task (each task's own setting), on, off or both
   std::string derivatives = "matrix";  // matrix, adjoint or both
   std::string shooting = "single";     // single, multiple or both
+  std::string products = "difference"; // difference, exact or both
   double duration = 10.0;
   bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
@@ -54,6 +55,9 @@ std::string stages_note(const SweepOptions& opt) {
 constexpr const char* kArmsTable = "arms";
 constexpr const char* kTrackingTable = "tracking";
 bool task_table(const std::string& table) { return table == kArmsTable || table == kTrackingTable; }
+// the work-precision grid: mjcf/work_precision.json lists the paper's models (the swing-up on
+// each), real arms' task files and the kmax values
+constexpr const char* kWorkPrecisionTable = "work-precision";
 
 struct Cell {
   // arms: model is the task file as the list names it
@@ -61,14 +65,24 @@ struct Cell {
   int n = 0, N = 0, kmax = 0;
   std::string settings;      // hash of everything else the cell runs with (the task as run)
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
+  std::string products = "difference";  // how C/GMRES forms its products (DESIGN §11)
   // the resume key: every axis and setting the cell runs with. A cell's ID (--list-cells, --cell)
   // is its hash, so an axis added here reaches the cell runs with no other change.
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
-           (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" + settings;
+           (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" +
+           products + "|" + settings;
   }
   // the solver variant, as the tables label it
-  std::string variant() const { return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting"); }
+  std::string variant() const {
+    return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting") +
+           (products == "difference" ? "" : ", " + products + " products");
+  }
+  // whether the cell runs a task file (a real arm's) rather than the paper's task on a model
+  bool runs_task_file() const {
+    return task_table(table) || (table == kWorkPrecisionTable && model.size() > 5 &&
+                                 model.compare(model.size() - 5, 5, ".json") == 0);
+  }
 };
 
 // the hash of the contents of a model file, the files it includes and its asset files (not of
@@ -103,6 +117,8 @@ struct CellResult {
   // a frame target's tracking error: position [m] and orientation [rad], RMS and max (NaN without)
   double position_rms = NAN, position_max = NAN, orientation_rms = NAN, orientation_max = NAN;
   double tracking_tolerance = NAN;
+  double mean_residual = NAN;     // mean ‖F‖ over the updates
+  double closed_loop_cost = NAN;  // ∫ L dt of the task's stage cost along the run
 };
 
 // the paper's figure for a cell (mjcf/paper_tables.json)
@@ -128,13 +144,14 @@ std::string arms_list(const SweepOptions& opt) {
 
 // the file a cell runs: the paper's model, or an arm's task file (relative to its list's directory)
 std::string cell_file(const SweepOptions& opt, const Cell& c) {
-  if (!task_table(c.table)) return in_models(opt, c.model);
+  if (!c.runs_task_file()) return in_models(opt, c.model);
+  if (c.table == kWorkPrecisionTable) return in_models(opt, c.model);
   return (std::filesystem::path(arms_list(opt)).parent_path() / c.model).string();
 }
 
 // the task a cell runs: the paper's on the cell's model, or an arm's own task file
 Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
-  const bool arm = task_table(c.table);
+  const bool arm = c.runs_task_file();
   Task task = arm ? load_task(cell_file(opt, c)) : base;
   if (!arm) {
     task.model = cell_file(opt, c);
@@ -143,6 +160,7 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   task.formulation = c.formulation;
   task.derivatives = c.derivatives;
   task.shooting = c.shooting;
+  task.products = c.products;
   task.N = c.N;
   task.kmax = c.kmax;
   task.offset_free = c.offset_free;
@@ -204,6 +222,38 @@ std::vector<bool> offset_free_axis(const SweepOptions& opt, const Task& task) {
 
 std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, const Task& base);
 
+// the work-precision grid's list (mjcf/work_precision.json of the models directory): the runs
+// (the paper's models, then task files) and the kmax values
+struct WorkPrecisionGrid {
+  std::vector<std::string> runs;
+  std::vector<int> kmax;
+};
+WorkPrecisionGrid work_precision_grid(const SweepOptions& opt) {
+  const std::string path = in_models(opt, "work_precision.json");
+  const nlohmann::json j = read_json_file(path, "work-precision grid");
+  WorkPrecisionGrid g;
+  try {
+    for (const char* key : {"models", "tasks"}) {
+      for (const std::string& x : j.at(key).get<std::vector<std::string>>()) g.runs.push_back(x);
+    }
+    g.kmax = j.at("kmax").get<std::vector<int>>();
+  } catch (const nlohmann::json::exception& e) {
+    throw std::invalid_argument("'" + path + "': expected {\"models\": [model files], \"tasks\": [task files], "
+                                "\"kmax\": [integers]}, " + e.what());
+  }
+  for (const std::string& x : g.runs) {
+    if (x.empty() || x.find_first_of(",\r\n") != std::string::npos) {
+      throw std::invalid_argument("'" + path + "' lists the file name '" + abbreviate(x) +
+                                  "', empty or with a comma or line break (it names a CSV row)");
+    }
+  }
+  if (g.runs.empty() || g.kmax.empty()) throw std::invalid_argument("'" + path + "' lists no run or no kmax");
+  for (int k : g.kmax) {
+    if (k < 1) throw std::invalid_argument("'" + path + "' lists kmax " + std::to_string(k) + ": expected >= 1");
+  }
+  return g;
+}
+
 // the grid, each cell keyed by the settings it runs with
 std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables, const Task& base) {
   std::vector<Cell> cells = grid_of(opt, tables, base);
@@ -220,7 +270,13 @@ std::vector<Cell> grid(const SweepOptions& opt, const PaperTables& tables, const
 // the cells of the chosen tables (the paper's in the file's order) for the chosen derivative
 // modes and shooting schemes
 std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, const Task& base) {
-  std::vector<std::string> modes, shootings;
+  std::vector<std::string> modes, shootings, products;
+  if (opt.products == "both") {
+    products = {"difference", "exact"};
+  } else {
+    parse_products(opt.products);
+    products = {opt.products};
+  }
   if (opt.derivatives == "both") {
     modes = {"matrix", "adjoint"};
   } else {
@@ -233,8 +289,10 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     parse_shooting(opt.shooting);
     shootings = {opt.shooting};
   }
-  if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && !task_table(opt.tables)) {
-    throw std::invalid_argument("--tables must be 12, 3, all, arms or tracking, got '" + opt.tables + "'");
+  if (opt.tables != "12" && opt.tables != "3" && opt.tables != "all" && !task_table(opt.tables) &&
+      opt.tables != kWorkPrecisionTable) {
+    throw std::invalid_argument("--tables must be 12, 3, all, arms, tracking or work-precision, got '" + opt.tables +
+                                "'");
   }
   if (opt.offset_free != "task" && opt.offset_free != "on" && opt.offset_free != "off" && opt.offset_free != "both") {
     throw std::invalid_argument("--offset-free must be task, on, off or both, got '" + opt.offset_free + "'");
@@ -253,10 +311,32 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     for (const std::string& file : arm_tasks(opt)) tasks.emplace_back(file, checked_arm_task(opt, file));
     for (const auto& mode : modes) {
       for (const auto& shooting : shootings) {
-        for (const auto& [file, t] : tasks) {
-          for (const bool offset_free : offset_free_axis(opt, t)) {
-            for (const char* f : {"fd", "id"}) {
-              cells.push_back({opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free});
+        for (const auto& product : products) {
+          for (const auto& [file, t] : tasks) {
+            for (const bool offset_free : offset_free_axis(opt, t)) {
+              for (const char* f : {"fd", "id"}) {
+                cells.push_back({opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free, product});
+              }
+            }
+          }
+        }
+      }
+    }
+    return cells;
+  }
+  if (opt.tables == kWorkPrecisionTable) {
+    const WorkPrecisionGrid g = work_precision_grid(opt);
+    for (const std::string& model : g.runs) {
+      const bool file = Cell{kWorkPrecisionTable, model}.runs_task_file();
+      const Task t = file ? load_task(in_models(opt, model)) : base;
+      for (const auto& mode : modes) {
+        for (const auto& shooting : shootings) {
+          for (const char* f : {"fd", "id"}) {
+            for (const auto& product : products) {
+              for (const int kmax : g.kmax) {
+                cells.push_back({kWorkPrecisionTable, model, f, mode, shooting, 0, t.N, kmax, "", t.offset_free,
+                                 product});
+              }
             }
           }
         }
@@ -266,9 +346,12 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
   }
   for (const auto& mode : modes) {
     for (const auto& shooting : shootings) {
-      for (const PaperCell& p : tables.cells) {
-        if (opt.tables != "all" && p.table != opt.tables) continue;
-        cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free});
+      for (const auto& product : products) {
+        for (const PaperCell& p : tables.cells) {
+          if (opt.tables != "all" && p.table != opt.tables) continue;
+          cells.push_back(
+              {p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free, product});
+        }
       }
     }
   }
@@ -281,7 +364,8 @@ const std::vector<std::string> kCsvColumns = {
     "diverged_at", "mean_update_ms", "p95_update_ms", "final_q_error", "reach_tolerance", "reached",
     "final_v_norm", "paper_ms", "paper_note", "steps", "saturated_steps", "max_constraint_violation",
     "contact_steps", "max_contact_force", "max_final_disturbance", "position_rms", "position_max",
-    "orientation_rms", "orientation_max", "tracking_tolerance", "settings"};
+    "orientation_rms", "orientation_max", "tracking_tolerance", "products", "mean_residual", "closed_loop_cost",
+    "settings"};
 
 std::string csv_header() {
   std::string h;
@@ -335,6 +419,9 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   set("orientation_max", r.orientation_max);
   set("tracking_tolerance", r.tracking_tolerance);
   set("max_final_disturbance", r.final_disturbance);
+  set("products", r.cell.products);
+  set("mean_residual", r.mean_residual);
+  set("closed_loop_cost", r.closed_loop_cost);
   set("settings", r.cell.settings);
   std::string row;
   for (const std::string& x : f) row += (row.empty() ? "" : ",") + x;
@@ -374,7 +461,7 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
     try {
       CellResult r;
       r.cell = {at("table"), at("model"), at("formulation"), at("derivatives"), at("shooting"), std::stoi(at("n")),
-                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1"};
+                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1", at("products")};
       r.Qa = std::stod(at("Qa"));
       r.diverged = at("diverged") == "1";
       r.diverged_at = std::stod(at("diverged_at"));
@@ -395,6 +482,8 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
       r.orientation_rms = std::stod(at("orientation_rms"));
       r.orientation_max = std::stod(at("orientation_max"));
       r.tracking_tolerance = std::stod(at("tracking_tolerance"));
+      r.mean_residual = std::stod(at("mean_residual"));
+      r.closed_loop_cost = std::stod(at("closed_loop_cost"));
       if (!keys.count(r.cell.key())) {
         throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
                                     r.cell.formulation + " " + r.cell.variant() +
@@ -610,8 +699,140 @@ std::string tracking_markdown(const SweepOptions& opt, const std::vector<Cell>& 
   return o.str();
 }
 
+// the work-precision tables: per run and derivative mode, each formulation's time per update
+// against its accuracy over kmax and the products; then the verdict as the time each
+// formulation needs to reach a residual or a closed-loop cost
+std::string work_precision_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
+                                    const std::map<std::string, CellResult>& done) {
+  auto find = [&](const Cell& c) -> const CellResult* {
+    const auto it = done.find(c.key());
+    return it == done.end() ? nullptr : &it->second;
+  };
+  std::vector<std::string> runs, modes, products;
+  std::vector<int> kmaxs;
+  auto add = [](auto& v, const auto& x) {
+    if (std::find(v.begin(), v.end(), x) == v.end()) v.push_back(x);
+  };
+  for (const Cell& c : cells) {
+    add(runs, c.model);
+    add(modes, c.derivatives + (c.shooting == "single" ? "" : ", " + c.shooting + " shooting"));
+    add(products, c.products);
+    add(kmaxs, c.kmax);
+  }
+  auto mode_of = [](const Cell& c) {
+    return c.derivatives + (c.shooting == "single" ? "" : ", " + c.shooting + " shooting");
+  };
+  auto cell_of = [&](const std::string& run, const std::string& mode, const std::string& f,
+                     const std::string& product, int kmax) -> const CellResult* {
+    for (const Cell& c : cells) {
+      if (c.model == run && mode_of(c) == mode && c.formulation == f && c.products == product && c.kmax == kmax) {
+        return find(c);
+      }
+    }
+    return nullptr;
+  };
+  auto upper = [](const std::string& f) { return std::string(f == "fd" ? "FD" : "ID"); };
+  std::ostringstream o;
+  o << "# idmpc sweep: work–precision\n\n"
+    << "Each run of `mjcf/work_precision.json` (the paper's swing-up on its models, the real arms' reach tasks) in "
+       "closed loop with the MuJoCo plant, "
+    << (opt.duration_given ? fmt(opt.duration) + " s simulated" : "the swing-ups " + fmt(opt.duration) +
+                                                                       " s, the tasks their own duration")
+    << ", under FD and ID for each kmax and each kind of C/GMRES product (`difference`: the paper's forward "
+       "differences, h = 1e-8; `exact`: dual numbers, stage by stage). Each entry: mean ms per update · mean "
+       "optimality residual ‖F‖ · closed-loop cost ∫L dt of the task's stage cost; `*` diverged (means until "
+       "then). "
+    << stages_note(opt) << "\n";
+  for (const std::string& run : runs) {
+    int n = 0;
+    for (const Cell& c : cells) {
+      if (c.model != run) continue;
+      if (const CellResult* r = find(c)) n = r->cell.n;
+    }
+    for (const std::string& mode : modes) {
+      o << "\n## " << run << " (n = " << (n > 0 ? std::to_string(n) : "–") << "), derivatives: " << mode
+        << "\n\n| kmax |";
+      for (const char* f : {"fd", "id"}) {
+        for (const std::string& p : products) o << ' ' << upper(f) << ' ' << p << " |";
+      }
+      o << "\n|---|";
+      for (size_t k = 0; k < 2 * products.size(); ++k) o << "---|";
+      o << '\n';
+      for (int kmax : kmaxs) {
+        o << "| " << kmax << " |";
+        for (const char* f : {"fd", "id"}) {
+          for (const std::string& p : products) {
+            const CellResult* r = cell_of(run, mode, f, p, kmax);
+            o << ' '
+              << (r ? fmt(r->mean_ms) + (r->diverged ? "*" : "") + " · " + fmt(r->mean_residual, 2) + " · " +
+                          fmt(r->closed_loop_cost, 4)
+                    : std::string("–"))
+              << " |";
+          }
+        }
+        o << '\n';
+      }
+    }
+  }
+  // the verdict: the least time per update with which a formulation reaches a target, over kmax
+  // and products (runs that diverged do not count)
+  auto fastest = [&](const std::string& run, const std::string& mode, const std::string& f, auto reaches) {
+    const CellResult* best = nullptr;
+    for (const Cell& c : cells) {
+      if (c.model != run || mode_of(c) != mode || c.formulation != f) continue;
+      const CellResult* r = find(c);
+      if (r && !r->diverged && reaches(*r) && (!best || r->mean_ms < best->mean_ms)) best = r;
+    }
+    return best;
+  };
+  auto entry = [&](const CellResult* r) {
+    return r ? fmt(r->mean_ms) + " (kmax " + std::to_string(r->cell.kmax) + ", " + r->cell.products + ")"
+             : std::string("not reached");
+  };
+  auto ratio = [&](const CellResult* fd, const CellResult* id) { return fmt(fd && id ? id->mean_ms / fd->mean_ms : NAN, 2); };
+  const double residuals[] = {1e-2, 1e-3, 1e-4};
+  const double cost_margins[] = {0.01, 0.1};
+  o << "\n## Verdict at equal accuracy\n\n"
+    << "The least mean ms per update with which each formulation reaches a target, over every kmax and both "
+       "kinds of products (runs that diverged do not count); in brackets the variant. Targets: a mean "
+       "residual ‖F‖ ≤ R, and a closed-loop cost within 1 % and 10 % of the lowest any run of that model "
+       "reached. Beside them, the paper's comparison: equal kmax = 10 with difference products.\n\n"
+    << "| run | derivatives | target | FD ms | ID ms | ID/FD |\n|---|---|---|---|---|---|\n";
+  for (const std::string& run : runs) {
+    double lowest = NAN;
+    for (const Cell& c : cells) {
+      const CellResult* r = c.model == run ? find(c) : nullptr;
+      if (r && !r->diverged && !(r->closed_loop_cost >= lowest)) lowest = r->closed_loop_cost;
+    }
+    for (const std::string& mode : modes) {
+      auto row = [&](const std::string& target, const CellResult* fd, const CellResult* id) {
+        o << "| " << run << " | " << mode << " | " << target << " | " << entry(fd) << " | " << entry(id) << " | "
+          << ratio(fd, id) << " |\n";
+      };
+      const CellResult *fd10 = cell_of(run, mode, "fd", "difference", 10), *id10 = cell_of(run, mode, "id", "difference", 10);
+      if (fd10 || id10) {
+        o << "| " << run << " | " << mode << " | equal kmax = 10, difference | "
+          << (fd10 ? fmt(fd10->mean_ms) + (fd10->diverged ? "*" : "") : "–") << " | "
+          << (id10 ? fmt(id10->mean_ms) + (id10->diverged ? "*" : "") : "–") << " | " << ratio(fd10, id10) << " |\n";
+      }
+      for (double R : residuals) {
+        auto reaches = [R](const CellResult& r) { return r.mean_residual <= R; };
+        row("‖F‖ ≤ " + fmt(R), fastest(run, mode, "fd", reaches), fastest(run, mode, "id", reaches));
+      }
+      for (double m : cost_margins) {
+        const double bound = lowest * (1 + m);
+        auto reaches = [bound](const CellResult& r) { return r.closed_loop_cost <= bound; };
+        row("cost ≤ " + fmt(bound, 4) + " (+" + fmt(100 * m) + " %)", fastest(run, mode, "fd", reaches),
+            fastest(run, mode, "id", reaches));
+      }
+    }
+  }
+  return o.str();
+}
+
 std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
                      const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
+  if (opt.tables == kWorkPrecisionTable) return work_precision_markdown(opt, cells, done);
   if (opt.tables == kTrackingTable) return tracking_markdown(opt, cells, done);
   if (opt.tables == kArmsTable) return arms_markdown(opt, cells, done);
   auto find = [&](const Cell& c) -> const CellResult* {
@@ -748,8 +969,8 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
     std::string name = std::filesystem::path(c.model).replace_extension().string();
     std::replace(name.begin(), name.end(), '/', '_');
     log = opt.out_dir + "/log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
-          (c.shooting == "single" ? "" : "_" + c.shooting) + "_N" + std::to_string(c.N) + "_k" +
-          std::to_string(c.kmax) + (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
+          (c.shooting == "single" ? "" : "_" + c.shooting) + (c.products == "difference" ? "" : "_" + c.products) +
+          "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) + (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
           ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
@@ -771,6 +992,8 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   r.reach_tolerance = s.task.reach_tolerance;
   r.contact_steps = s.contact_steps;
   r.max_contact_force = s.max_contact_force;
+  r.mean_residual = s.mean_residual;
+  r.closed_loop_cost = s.closed_loop_cost;
   r.final_disturbance = 0;
   for (double d : s.final_disturbance) r.final_disturbance = std::max(r.final_disturbance, std::abs(d));
   if (s.tracking) {
@@ -814,7 +1037,9 @@ Sweep sweep_of(const SweepOptions& opt) {
       throw std::logic_error("two cells of the sweep have the ID " + cell_id(c.key()));
     }
   }
-  const std::string stem = opt.out_dir + (task_table(opt.tables) ? "/" + opt.tables : std::string("/sweep"));
+  const std::string stem = opt.out_dir + (task_table(opt.tables)                ? "/" + opt.tables
+                                          : opt.tables == kWorkPrecisionTable ? std::string("/work_precision")
+                                                                               : std::string("/sweep"));
   s.csv = stem + ".csv";
   s.md = stem + ".md";
   return s;
@@ -868,7 +1093,7 @@ void run_serial(const SweepOptions& opt) {
   const OutputDirectoryLock lock(opt.out_dir, OutputDirectoryLock::Mode::exclusive);
   // the temporaries of a sweep killed before it could remove them (of the tables and the logs);
   // the directory is locked, so no other sweep is writing there
-  static const std::regex temporaries(R"(\.?(?:(?:sweep|arms|tracking)\.(?:csv|md)|log_.*)\.tmp\.([0-9]+)\.[0-9]+)");
+  static const std::regex temporaries(R"(\.?(?:(?:sweep|arms|tracking|work_precision)\.(?:csv|md)|log_.*)\.tmp\.([0-9]+)\.[0-9]+)");
   remove_stale_temporaries(opt.out_dir, temporaries);
   std::map<std::string, CellResult> done = read_finished(s.csv, s.cells);
 
@@ -981,7 +1206,7 @@ void merge(const SweepOptions& opt) {
                                 ids);
   }
   // the temporaries killed runs left: of the tables, and of the records of cells that ran again
-  static const std::regex table_temporaries(R"(\.(?:sweep|arms|tracking)\.(?:csv|md)\.tmp\.([0-9]+)\.[0-9]+)");
+  static const std::regex table_temporaries(R"(\.(?:sweep|arms|tracking|work_precision)\.(?:csv|md)\.tmp\.([0-9]+)\.[0-9]+)");
   static const std::regex record_temporaries(R"(\.[0-9a-f]{16}\.csv\.tmp\.([0-9]+)\.[0-9]+)");
   remove_stale_temporaries(opt.out_dir, table_temporaries);
   remove_stale_temporaries(opt.out_dir + "/cells", record_temporaries);
@@ -1006,8 +1231,10 @@ void register_sweep(CLI::App& app) {
   CLI::Option* tables =
       sub->add_option("--tables", opt->tables,
                       "12 (arm4 N x kmax), 3 (n = 8..32), all, arms (each task of --arms-tasks under FD and ID, "
-                      "written to arms.csv and arms.md) or tracking (each task of --arms-tasks, by default "
-                      "mjcf/tracking.json, with its tracking error, written to tracking.csv and tracking.md)")
+                      "written to arms.csv and arms.md), tracking (each task of --arms-tasks, by default "
+                      "mjcf/tracking.json, with its tracking error, written to tracking.csv and tracking.md) or "
+                      "work-precision (mjcf/work_precision.json: time per update against the residual and the "
+                      "closed-loop cost over kmax, written to work_precision.csv and work_precision.md)")
           ->capture_default_str();
   CLI::Option* arms_tasks =
       sub->add_option("--arms-tasks", opt->arms_tasks,
@@ -1020,6 +1247,9 @@ void register_sweep(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();
   sub->add_option("--shooting", opt->shooting, "single, multiple or both (DESIGN §9)")->capture_default_str();
+  sub->add_option("--products", opt->products,
+                  "difference (the paper's forward differences), exact (dual numbers) or both (DESIGN §11)")
+      ->capture_default_str();
   CLI::Option* duration =
       sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")
           ->capture_default_str();
