@@ -178,6 +178,7 @@ def test_controller_settings_defaults_are_the_cpp_defaults():
     s = idmpc.ControllerSettings()
     assert (s.formulation, s.derivatives, s.N) == ("id", "adjoint", 25)
     assert (s.cgmres.kmax, s.cgmres.Tf, s.cgmres.dt, s.cgmres.shooting) == (10, 0.5, 1e-3, "single")
+    assert s.cgmres.products == "difference"
     assert s.q_ref.shape == (0,) and s.horizon_model is None and s.limits_in_horizon
 
 
@@ -199,6 +200,12 @@ def test_controller_from_settings():
     tau = controller.initialize(q, v)
     assert tau.shape == (4,) and np.all(np.isfinite(tau))
     assert controller.update(0.0, q, v) and controller.failure() == ""
+    # the same controller with exact products takes the same step to rounding
+    settings.cgmres.products = "exact"
+    exact = idmpc.Controller(idmpc.load_model(str(MJCF / "arm4.xml")), settings)
+    np.testing.assert_allclose(exact.initialize(q, v), tau, rtol=1e-9, atol=1e-9)
+    assert exact.update(0.0, q, v)
+    np.testing.assert_allclose(exact.torque(), controller.torque(), rtol=1e-5, atol=1e-6)
     controller.set_target(np.full(4, 0.1))
     np.testing.assert_array_equal(controller.q_ref(), np.full(4, 0.1))
     with pytest.raises(ValueError, match="update: q has 3 entries, expected n = 4"):
@@ -211,6 +218,8 @@ def test_bad_settings_are_value_errors():
         settings.formulation = "fdd"
     with pytest.raises(ValueError, match="tangential"):
         settings.cgmres.shooting = "tangential"
+    with pytest.raises(ValueError, match="products must be 'difference' or 'exact', got 'finite'"):
+        settings.cgmres.products = "finite"
 
 
 @pytest.mark.parametrize("field,value,message", [

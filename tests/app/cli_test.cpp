@@ -831,6 +831,50 @@ TEST_F(Cli, SweepRunsAUsersListOfArmTasks) {
   EXPECT_TRUE(std::regex_search(md, outcome)) << md;
 }
 
+// --tables work-precision: the runs of work_precision.json of --models (the paper's task on a
+// model, a task file) over its kmax values, each with both kinds of products: the CSV has each
+// cell's residual and closed-loop cost, the tables each formulation's time against them and the
+// verdict at equal accuracy
+TEST_F(Cli, SweepHasAWorkPrecisionTable) {
+  fs::create_directories(dir_ / "mine");
+  fs::copy_file(kArm4, dir_ / "mine" / "arm4.xml");
+  write("mine/touch.xml", kTouchModel);
+  write("mine/touch.json", kTouchTask);
+  write("mine/work_precision.json", R"({"models": ["arm4.xml"], "tasks": ["touch.json"], "kmax": [1, 3]})");
+  const std::string options = "sweep --tables work-precision --models mine --derivatives adjoint --products both "
+                              "--duration 0.02 --out wp";
+  const Result r = idmpc(options);
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto rows = csv_rows(dir_ / "wp" / "work_precision.csv");
+  ASSERT_EQ(rows.size(), 16u) << "2 runs x FD, ID x 2 kinds of products x 2 kmax";
+  int exact = 0;
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.at("model") + " " + row.at("formulation") + " " + row.at("products") + " " + row.at("kmax"));
+    EXPECT_EQ(row.at("table"), "work-precision");
+    exact += row.at("products") == "exact";
+    EXPECT_EQ(row.at("diverged"), "0");
+    EXPECT_EQ(row.at("steps"), "20");
+    EXPECT_GT(std::stod(row.at("mean_residual")), 0);
+    EXPECT_GT(std::stod(row.at("closed_loop_cost")), 0);
+  }
+  EXPECT_EQ(exact, 8);
+  const std::string md = slurp(dir_ / "wp" / "work_precision.md");
+  EXPECT_NE(md.find("## arm4.xml (n = 4), derivatives: adjoint\n"), std::string::npos) << md;
+  EXPECT_NE(md.find("## touch.json (n = 1), derivatives: adjoint\n"), std::string::npos) << md;
+  EXPECT_NE(md.find("| kmax | FD difference | FD exact | ID difference | ID exact |"), std::string::npos) << md;
+  EXPECT_NE(md.find("## Verdict at equal accuracy"), std::string::npos) << md;
+  EXPECT_TRUE(std::regex_search(md, std::regex(R"(\| arm4\.xml \| adjoint \| cost ≤ [0-9.e+-]+ \(\+10 %\) \| )")))
+      << md;
+  // every cell listed once, and an unknown kind of products refused naming it
+  const Result list = idmpc(options + " --list-cells");
+  ASSERT_EQ(list.code, 0) << list.err;
+  EXPECT_EQ(lines_of(list.out).size(), 16u);
+  const Result bad = idmpc("sweep --tables work-precision --products finite --out bad");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("products must be 'difference' or 'exact', got 'finite'"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
+}
+
 // a list that cannot be read, or that names a task that cannot run, is refused with one line
 // naming it, before any cell runs and before any output is made
 TEST_F(Cli, SweepRefusesABadListOfArmTasksBeforeAnyCell) {
