@@ -1006,6 +1006,16 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   return r;
 }
 
+// run_cell after a progress line's start: an error goes on a line of its own
+CellResult run_cell_after_progress(const Task& base, const Cell& c, const SweepOptions& opt) {
+  try {
+    return run_cell(base, c, opt);
+  } catch (...) {
+    std::fputc('\n', stderr);
+    throw;
+  }
+}
+
 // the cell as the progress lines and errors name it
 std::string cell_label(const Cell& c) {
   return c.model + " " + (c.formulation == "fd" ? "FD" : "ID") + " " + c.variant() +
@@ -1110,13 +1120,7 @@ void run_serial(const SweepOptions& opt) {
       std::fprintf(stderr, "done earlier\n");
       continue;
     }
-    CellResult r;
-    try {
-      r = run_cell(s.base, c, opt);
-    } catch (...) {
-      std::fputc('\n', stderr);  // the error goes on a line of its own
-      throw;
-    }
+    const CellResult r = run_cell_after_progress(s.base, c, opt);
     std::fprintf(stderr, "%s\n", outcome(r).c_str());
     append.append(csv_row(s.tables, r) + "\n");
     done[c.key()] = r;
@@ -1171,13 +1175,7 @@ void run_one_cell(const SweepOptions& opt, const std::string& id) {
   remove_stale_temporaries(fs::path(record).parent_path().string(),
                            std::regex("\\." + id + "\\.csv\\.tmp\\.([0-9]+)\\.[0-9]+"));
   AtomicFile f(record);  // an unwritable directory fails before the run
-  CellResult r;
-  try {
-    r = run_cell(s.base, c, opt);
-  } catch (...) {
-    std::fputc('\n', stderr);  // the error goes on a line of its own
-    throw;
-  }
+  const CellResult r = run_cell_after_progress(s.base, c, opt);
   f.stream() << csv_header() << '\n' << csv_row(s.tables, r) << '\n';
   f.commit();
   std::fprintf(stderr, "%s\n", outcome(r).c_str());

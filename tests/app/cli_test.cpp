@@ -79,27 +79,10 @@ const char* kBallJointModel = R"(<mujoco model="ball">
 
 using Result = test::CommandResult;
 using test::quote;
+using test::lines_of;
 using test::slurp;
+using test::split;
 
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::stringstream ss(text);
-  std::string line;
-  while (std::getline(ss, line)) lines.push_back(line);
-  return lines;
-}
-
-// fields of a CSV line, a trailing empty field included
-std::vector<std::string> split(const std::string& line, char sep = ',') {
-  std::vector<std::string> f;
-  size_t begin = 0;
-  for (size_t end = line.find(sep); end != std::string::npos; end = line.find(sep, begin)) {
-    f.push_back(line.substr(begin, end - begin));
-    begin = end + 1;
-  }
-  f.push_back(line.substr(begin));
-  return f;
-}
 
 // each test gets a fresh directory, removed afterwards
 class Cli : public ::testing::Test {

@@ -38,26 +38,10 @@ const std::set<std::string> kTimingColumns = {"mean_update_ms", "p95_update_ms"}
 
 using Result = test::CommandResult;
 using test::quote;
+using test::lines_of;
 using test::slurp;
+using test::split;
 
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> lines;
-  std::stringstream ss(text);
-  std::string line;
-  while (std::getline(ss, line)) lines.push_back(line);
-  return lines;
-}
-
-std::vector<std::string> split(const std::string& line, char sep = ',') {
-  std::vector<std::string> f;
-  size_t begin = 0;
-  for (size_t end = line.find(sep); end != std::string::npos; end = line.find(sep, begin)) {
-    f.push_back(line.substr(begin, end - begin));
-    begin = end + 1;
-  }
-  f.push_back(line.substr(begin));
-  return f;
-}
 
 // a row of a sweep's CSV without its timing columns
 std::vector<std::string> untimed(const std::vector<std::string>& header, const std::string& row) {

@@ -41,4 +41,23 @@ pid_t start_command(const std::string& command) {
   return pid;
 }
 
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::stringstream ss(text);
+  std::string line;
+  while (std::getline(ss, line)) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> split(const std::string& line, char sep) {
+  std::vector<std::string> f;
+  size_t begin = 0;
+  for (size_t end = line.find(sep); end != std::string::npos; end = line.find(sep, begin)) {
+    f.push_back(line.substr(begin, end - begin));
+    begin = end + 1;
+  }
+  f.push_back(line.substr(begin));
+  return f;
+}
+
 }  // namespace idmpc::test

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace idmpc::test {
 
@@ -19,6 +20,11 @@ std::string quote(const std::string& s);
 
 /// @brief The whole content of a file ("" if it cannot be read).
 std::string slurp(const std::filesystem::path& p);
+
+/// @brief The lines of a text, without their line ends.
+std::vector<std::string> lines_of(const std::string& text);
+/// @brief The fields of a CSV line, a trailing empty field included.
+std::vector<std::string> split(const std::string& line, char sep = ',');
 
 /// @brief Runs the shell command `command` in directory `dir`, stdout and stderr captured
 /// through the files dir/.stdout and dir/.stderr, removed afterwards.
