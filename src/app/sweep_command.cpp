@@ -44,6 +44,7 @@ struct SweepOptions {
   bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
   bool simd_stages = true;  // false: --no-simd-stages, every run stage by stage (the paper's arithmetic)
+  std::vector<std::string> latency = {"none"};  // the compute latencies each cell runs with (an axis)
 };
 
 // what the tables' matrix mode is, for the tables' headers
@@ -66,9 +67,11 @@ struct Cell {
   int n = 0, N = 0, kmax = 0;
   std::string settings;      // hash of everything else the cell runs with (the task as run)
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
+  std::string latency = "none";  // compute latency (Task::latency)
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
-           (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" + settings;
+           (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" + settings +
+           (latency == "none" ? "" : "|latency " + latency);
   }
   // the solver variant, as the tables label it
   std::string variant() const { return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting"); }
@@ -106,6 +109,10 @@ struct CellResult {
   // a frame target's tracking error: position [m] and orientation [rad], RMS and max (NaN without)
   double position_rms = NAN, position_max = NAN, orientation_rms = NAN, orientation_max = NAN;
   double tracking_tolerance = NAN;
+  // compute latency: updates run, those slower than the control period, the slowest [ms], and the
+  // tracking cost (RMS of |q - q_ref| over the run)
+  long updates = 0, deadline_misses = 0;
+  double max_ms = NAN, joint_error_rms = NAN;
 };
 
 // the paper's figure for a cell (mjcf/paper_tables.json)
@@ -149,6 +156,7 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   task.N = c.N;
   task.kmax = c.kmax;
   task.offset_free = c.offset_free;
+  task.latency = c.latency;
   if (!arm || opt.duration_given) task.duration = opt.duration;
   if (!opt.simd_stages) task.simd_stages = false;
   return task;
@@ -187,7 +195,7 @@ std::vector<std::string> arm_tasks(const SweepOptions& opt) {
 // a listed task that cannot run is refused before any cell runs: the task file reads, its model
 // loads, and its settings fit the model (q0, q_ref, limits and weights per joint)
 Task checked_arm_task(const SweepOptions& opt, const std::string& file) {
-  const std::string path = cell_file(opt, Cell{opt.tables, file, "", "", "", 0, 0, 0, "", false});
+  const std::string path = cell_file(opt, Cell{opt.tables, file, "", "", "", 0, 0, 0, "", false, "none"});
   try {
     Task task = load_task(path);
     const mj::TaskRun run(task);
@@ -258,8 +266,10 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
       for (const auto& shooting : shootings) {
         for (const auto& [file, t] : tasks) {
           for (const bool offset_free : offset_free_axis(opt, t)) {
-            for (const char* f : {"fd", "id"}) {
-              cells.push_back({opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free});
+            for (const std::string& latency : opt.latency) {
+              for (const char* f : {"fd", "id"}) {
+                cells.push_back({opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free, latency});
+              }
             }
           }
         }
@@ -271,7 +281,10 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     for (const auto& shooting : shootings) {
       for (const PaperCell& p : tables.cells) {
         if (opt.tables != "all" && p.table != opt.tables) continue;
-        cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free});
+        for (const std::string& latency : opt.latency) {
+          cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free,
+                           latency});
+        }
       }
     }
   }
@@ -284,7 +297,8 @@ const std::vector<std::string> kCsvColumns = {
     "diverged_at", "mean_update_ms", "p95_update_ms", "final_q_error", "reach_tolerance", "reached",
     "final_v_norm", "paper_ms", "paper_note", "steps", "saturated_steps", "max_constraint_violation",
     "contact_steps", "max_contact_force", "max_final_disturbance", "position_rms", "position_max",
-    "orientation_rms", "orientation_max", "tracking_tolerance", "settings"};
+    "orientation_rms", "orientation_max", "tracking_tolerance", "latency", "updates", "deadline_misses",
+    "max_update_ms", "joint_error_rms", "settings"};
 
 std::string csv_header() {
   std::string h;
@@ -338,6 +352,11 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   set("orientation_max", r.orientation_max);
   set("tracking_tolerance", r.tracking_tolerance);
   set("max_final_disturbance", r.final_disturbance);
+  set("latency", r.cell.latency);
+  set("updates", r.updates);
+  set("deadline_misses", r.deadline_misses);
+  set("max_update_ms", r.max_ms);
+  set("joint_error_rms", r.joint_error_rms);
   set("settings", r.cell.settings);
   std::string row;
   for (const std::string& x : f) row += (row.empty() ? "" : ",") + x;
@@ -377,7 +396,7 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
     try {
       CellResult r;
       r.cell = {at("table"), at("model"), at("formulation"), at("derivatives"), at("shooting"), std::stoi(at("n")),
-                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1"};
+                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1", at("latency")};
       r.Qa = std::stod(at("Qa"));
       r.diverged = at("diverged") == "1";
       r.diverged_at = std::stod(at("diverged_at"));
@@ -398,6 +417,10 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
       r.orientation_rms = std::stod(at("orientation_rms"));
       r.orientation_max = std::stod(at("orientation_max"));
       r.tracking_tolerance = std::stod(at("tracking_tolerance"));
+      r.updates = std::stol(at("updates"));
+      r.deadline_misses = std::stol(at("deadline_misses"));
+      r.max_ms = std::stod(at("max_update_ms"));
+      r.joint_error_rms = std::stod(at("joint_error_rms"));
       if (!keys.count(r.cell.key())) {
         throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
                                     r.cell.formulation + " " + r.cell.variant() +
@@ -613,6 +636,95 @@ std::string tracking_markdown(const SweepOptions& opt, const std::vector<Cell>& 
   return o.str();
 }
 
+// the latency table: each run under every latency of the axis side by side: deadline misses
+// (updates slower than the control period) of the updates run, mean and max ms per update, and the
+// tracking cost (RMS of |q - q_ref| over the run) against the first latency's
+std::string latency_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
+                             const std::map<std::string, CellResult>& done) {
+  // a run without its latency (whose settings differ by it alone)
+  auto run_of = [](Cell c) {
+    c.latency = "none";
+    c.settings.clear();
+    return c.key();
+  };
+  std::vector<std::string> runs;
+  std::map<std::string, const Cell*> first_cell;
+  for (const Cell& c : cells) {
+    if (first_cell.emplace(run_of(c), &c).second) runs.push_back(run_of(c));
+  }
+  auto result = [&](const std::string& run, const std::string& latency) -> const CellResult* {
+    for (const Cell& c : cells) {
+      if (c.latency == latency && run_of(c) == run) {
+        const auto it = done.find(c.key());
+        return it == done.end() ? nullptr : &it->second;
+      }
+    }
+    return nullptr;
+  };
+  const std::string& base = opt.latency.front();
+  std::ostringstream o;
+  o << "\n## Compute latency\n\n"
+    << "Every run under each `--latency`: `none` applies each torque one control period after its measurement "
+       "(the paper's timing, eqs. 27-28); `measured` applies it after the whole plant steps the update's wall "
+       "time took, the controller skipping the control steps it is still busy at; a figure in ms does the same "
+       "with that compute time. A deadline miss is an update slower than the control period (counted under "
+       "every setting: for `none` and `measured` from the wall time on this machine). Meets its rate: no "
+       "update of its `none` and `measured` runs missed the deadline. Tracking cost: RMS over the run of "
+       "|q - q_ref| [rad]; the last columns divide it by the `"
+    << base << "` run's. The tables above are of the first latency, `" << base << "`. `*` diverged.\n\n| run | f |";
+  for (const std::string& l : opt.latency) {
+    o << " " << l << ": misses / updates | " << l << ": mean / max ms | " << l << ": cost |";
+  }
+  o << " meets its rate |";
+  for (size_t k = 1; k < opt.latency.size(); ++k) o << " cost " << opt.latency[k] << " / " << base << " |";
+  o << "\n|---|---|";
+  for (size_t k = 0; k < opt.latency.size(); ++k) o << "---|---|---|";
+  o << "---|";
+  for (size_t k = 1; k < opt.latency.size(); ++k) o << "---|";
+  o << "\n";
+  for (const std::string& run : runs) {
+    const Cell& c = *first_cell.at(run);
+    o << "| " << c.model << " " << c.variant()
+      << (task_table(c.table) ? std::string(c.offset_free ? ", offset-free" : "")
+                              : " N=" + std::to_string(c.N) + " kmax=" + std::to_string(c.kmax))
+      << " | " << (c.formulation == "fd" ? "FD" : "ID") << " |";
+    bool measured = false, meets = true;
+    for (const std::string& l : opt.latency) {
+      const CellResult* r = result(run, l);
+      if (!r) {
+        o << " – | – | – |";
+        continue;
+      }
+      if (l == "none" || l == "measured") {
+        measured = true;
+        meets = meets && r->deadline_misses == 0 && !r->diverged;
+      }
+      o << " " << r->deadline_misses << " / " << r->updates << " | " << fmt(r->mean_ms) << " / " << fmt(r->max_ms)
+        << " | " << fmt(r->joint_error_rms) << (r->diverged ? "*" : "") << " |";
+    }
+    o << " " << (measured ? (meets ? "yes" : "no") : "–") << " |";
+    const CellResult* first = result(run, base);
+    for (size_t k = 1; k < opt.latency.size(); ++k) {
+      const CellResult* r = result(run, opt.latency[k]);
+      o << " " << fmt(first && r && !first->diverged && !r->diverged ? r->joint_error_rms / first->joint_error_rms : NAN, 3)
+        << " |";
+    }
+    o << "\n";
+  }
+  return o.str();
+}
+
+std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
+                     const std::map<std::string, CellResult>& done, const SweepOptions& opt);
+
+// the tables of the grid, with the latency table when the latency axis has more than none
+std::string markdown_with_latency(const PaperTables& tables, const std::vector<Cell>& cells,
+                                  const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
+  const std::string tables_md = markdown(tables, cells, done, opt);
+  if (opt.latency == std::vector<std::string>{"none"}) return tables_md;
+  return tables_md + latency_markdown(opt, cells, done);
+}
+
 std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
                      const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
   if (opt.tables == kTrackingTable) return tracking_markdown(opt, cells, done);
@@ -629,7 +741,7 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
         return c;
       }
     }
-    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, "", n, N, kmax, "", false};
+    return Cell{table, paper_cell(tables, table, n, N, kmax).model, f, mode, "", n, N, kmax, "", false, "none"};
   };
   // ours (paper) for the ID/FD ratio of one grid point
   auto ratio = [&](const std::string& table, const std::string& mode, int n, int N, int kmax) {
@@ -753,7 +865,7 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
     log = opt.out_dir + "/log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
           (c.shooting == "single" ? "" : "_" + c.shooting) + "_N" + std::to_string(c.N) + "_k" +
           std::to_string(c.kmax) + (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
-          ".csv";
+          (c.latency == "none" ? "" : "_latency_" + c.latency) + ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
   const RunSummary s = run_swingup(task, log, true).summary;
@@ -768,6 +880,10 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   r.diverged_at = s.diverged ? s.diverged_at : NAN;
   r.mean_ms = s.mean_update_ms;
   r.p95_ms = s.p95_update_ms;
+  r.max_ms = s.max_update_ms;
+  r.updates = s.updates;
+  r.deadline_misses = s.deadline_misses;
+  r.joint_error_rms = s.joint_error_rms;
   r.final_q_error = s.final_q_error;
   r.final_v_norm = s.final_v_norm;
   r.reached = s.reached;
@@ -790,7 +906,8 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
 std::string cell_label(const Cell& c) {
   return c.model + " " + (c.formulation == "fd" ? "FD" : "ID") + " " + c.variant() +
          (task_table(c.table) ? (c.offset_free ? ", offset-free on" : ", offset-free off") : "") +
-         " N=" + std::to_string(c.N) + " kmax=" + std::to_string(c.kmax);
+         (c.latency == "none" ? "" : ", latency " + c.latency) + " N=" + std::to_string(c.N) +
+         " kmax=" + std::to_string(c.kmax);
 }
 
 // the temporaries of a sweep killed before it could remove them (AtomicFile's
@@ -812,6 +929,12 @@ void remove_stale_temporaries(const std::string& dir) {
 void run(const SweepOptions& opt) {
   namespace fs = std::filesystem;
   if (!(opt.duration > 0)) throw std::invalid_argument("--duration must be positive");
+  for (size_t k = 0; k < opt.latency.size(); ++k) {
+    if (std::find(opt.latency.begin(), opt.latency.begin() + static_cast<long>(k), opt.latency[k]) !=
+        opt.latency.begin() + static_cast<long>(k)) {
+      throw std::invalid_argument("--latency lists '" + opt.latency[k] + "' twice");
+    }
+  }
   const PaperTables tables = load_paper_tables();
   const Task base = load_task(tables.task);
   const std::vector<Cell> cells = grid(opt, tables, base);
@@ -880,13 +1003,13 @@ void run(const SweepOptions& opt) {
     append.append(csv_row(tables, r) + "\n");
     done[c.key()] = r;
     AtomicFile f(md);
-    f.stream() << markdown(tables, cells, done, opt);
+    f.stream() << markdown_with_latency(tables, cells, done, opt);
     f.commit();
   }
   AtomicFile f(md);
-  f.stream() << markdown(tables, cells, done, opt);
+  f.stream() << markdown_with_latency(tables, cells, done, opt);
   f.commit();
-  std::cout << markdown(tables, cells, done, opt) << "\nwritten: " << md << ", " << csv << "\n";
+  std::cout << markdown_with_latency(tables, cells, done, opt) << "\nwritten: " << md << ", " << csv << "\n";
 }
 
 }  // namespace
@@ -921,6 +1044,13 @@ void register_sweep(CLI::App& app) {
   CLI::Option* duration =
       sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")
           ->capture_default_str();
+  sub->add_option("--latency", opt->latency,
+                  "compute latency of every run, one value or several (an axis, comma-separated): none (the "
+                  "paper's timing), measured (each update's wall time) or a compute time in ms; the tables are "
+                  "of the first value, a latency table compares them all")
+      ->delimiter(',')
+      ->check(latency_check())
+      ->capture_default_str();
   sub->add_flag("--logs", opt->logs, "keep each run's CSV log in the output directory");
   sub->add_flag("!--no-simd-stages", opt->simd_stages,
                 "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "

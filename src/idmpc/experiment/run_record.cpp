@@ -327,6 +327,7 @@ nlohmann::json to_json(const RunSummary& s) {
   j["phase_ms"] = {{"rollout", s.rollout_ms}, {"costate", s.costate_ms}, {"gmres", s.gmres_ms}};
   j["latency"] = {{"setting", s.task.latency},
                   {"control_period_ms", s.control_period_ms},
+                  {"updates", s.updates},
                   {"deadline_misses", s.deadline_misses}};
   j["joint_error_rms"] = s.joint_error_rms;
   j["evaluations_per_update"] = s.evaluations_per_update;
@@ -419,6 +420,7 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     }
     if (j.contains("latency")) {
       s.control_period_ms = j.at("latency").at("control_period_ms").get<double>();
+      s.updates = j.at("latency").at("updates").get<long>();
       s.deadline_misses = j.at("latency").at("deadline_misses").get<long>();
     }
     s.joint_error_rms = j.value("joint_error_rms", 0.0);

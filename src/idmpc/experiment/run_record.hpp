@@ -66,7 +66,7 @@ struct RunSummary {
   /// @brief The compute latency the run had ("none", "measured" or ms; task.latency) and the
   /// updates whose compute time exceeded the control period (deadline misses; counted with any
   /// setting, "latency" in the JSON)
-  long deadline_misses = 0;
+  long updates = 0, deadline_misses = 0;
   double control_period_ms = 0;
   /// @brief RMS over the control steps of ‖q − q_ref(t)‖: the run's tracking cost
   double joint_error_rms = 0;

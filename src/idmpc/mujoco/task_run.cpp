@@ -170,6 +170,7 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.p50_update_ms = percentile(ms, 50);
   s.p95_update_ms = percentile(ms, 95);
   s.max_update_ms = result.updates > 0 ? result.max_update_ms : std::numeric_limits<double>::quiet_NaN();
+  s.updates = result.updates;
   s.deadline_misses = result.deadline_misses;
   s.control_period_ms = 1e3 * c.dt();
   s.joint_error_rms = result.joint_error_rms;
