@@ -926,15 +926,22 @@ void remove_stale_temporaries(const std::string& dir) {
   }
 }
 
+// the --latency axis: each value once, as parse_latency reads it back ("1.0" is "1")
+std::vector<std::string> latency_axis(const std::vector<std::string>& values) {
+  std::vector<std::string> axis;
+  for (const std::string& l : values) {
+    const std::string value = to_string(parse_latency(l));
+    if (std::find(axis.begin(), axis.end(), value) != axis.end()) {
+      throw std::invalid_argument("--latency lists '" + value + "' twice");
+    }
+    axis.push_back(value);
+  }
+  return axis;
+}
+
 void run(const SweepOptions& opt) {
   namespace fs = std::filesystem;
   if (!(opt.duration > 0)) throw std::invalid_argument("--duration must be positive");
-  for (size_t k = 0; k < opt.latency.size(); ++k) {
-    if (std::find(opt.latency.begin(), opt.latency.begin() + static_cast<long>(k), opt.latency[k]) !=
-        opt.latency.begin() + static_cast<long>(k)) {
-      throw std::invalid_argument("--latency lists '" + opt.latency[k] + "' twice");
-    }
-  }
   const PaperTables tables = load_paper_tables();
   const Task base = load_task(tables.task);
   const std::vector<Cell> cells = grid(opt, tables, base);
@@ -1059,6 +1066,7 @@ void register_sweep(CLI::App& app) {
   sub->callback([opt, duration, tables, arms_tasks] {
     opt->duration_given = duration->count() > 0;
     if (arms_tasks->count() > 0 && tables->count() == 0) opt->tables = kArmsTable;
+    opt->latency = latency_axis(opt->latency);
     run(*opt);
   });
 }

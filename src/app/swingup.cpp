@@ -98,7 +98,7 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
                      "after its measurement), measured (each update's wall time) or a compute time in ms; the "
                      "torque then reaches the plant after the whole plant steps its computation took")
           ->check(latency_check()),
-      [](const Task& s, Task& d) { d.latency = s.latency; });
+      [](const Task& s, Task& d) { d.latency = to_string(parse_latency(s.latency)); });
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
                    "evaluate the horizon stages one by one instead of in SIMD lanes (ID; FD matrix; FD "
                    "adjoint under multiple shooting): the paper's arithmetic"),

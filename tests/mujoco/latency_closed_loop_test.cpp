@@ -154,6 +154,22 @@ TEST(Latency, EveryUpdateSlowerThanThePeriodIsADeadlineMiss) {
   EXPECT_EQ(run(reach("fd", "1")).result.deadline_misses, 0);
 }
 
+TEST(Latency, TheSummaryRecordsTheSettingAndTheMisses) {
+  const Task task = reach("id", "2.5");
+  mj::TaskRun r(task);
+  mj::ClosedLoopSettings ls = r.loop_settings();
+  ls.phase_timing = false;
+  const nlohmann::json j = to_json(r.summary(r.run(ls)));
+  EXPECT_EQ(j.at("latency"), (nlohmann::json{{"setting", "2.5"}, {"control_period_ms", 1.0}, {"updates", 20},
+                                              {"deadline_misses", 20}}));
+  EXPECT_EQ(j.at("task").at("latency"), 2.5);
+  EXPECT_GT(j.at("joint_error_rms").get<double>(), 0);
+  const RunSummary back = summary_from_json(j, "summary");
+  EXPECT_EQ(back.task.latency, "2.5");
+  EXPECT_EQ(back.deadline_misses, 20);
+  EXPECT_EQ(back.updates, 20);
+}
+
 TEST(Latency, TheDelayedTorqueStaysWithinTheActuatorsRange) {
   for (const char* f : {"fd", "id"}) {
     const LoopRun r = run(reach(f, "2.6"));
