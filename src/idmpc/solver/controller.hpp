@@ -97,8 +97,8 @@ class Controller {
   /// assuming one period under the previous update's torque.
   bool update(double t, In q, In v, double interval, In tau_applied);
 
-  /// @brief Aims the last update's torque at the instant it reaches the plant, `delay` seconds
-  /// (>= 0) after its measurement: eqs. 27–28 predict the state over `delay` instead of Δt. The
+  /// @brief After a successful update: aims its torque at the instant it reaches the plant,
+  /// `delay` seconds (>= 0) after its measurement: eqs. 27–28 predict the state over `delay` instead of Δt. The
   /// rule stays the formulation's own: ID's ID(q + delay·v, v + delay·â_0, a_0) − d̂ moves with
   /// the delay, FD's u_0 has no prediction to move. torque() and commanded_torque() change
   /// (clamped as always); returns false with failure() for a non-finite torque.
