@@ -105,6 +105,8 @@ void bind_task(py::module_& m) {
       .def_readwrite("init_full_horizon", &Task::init_full_horizon)
       .def_readwrite("shooting", &Task::shooting, "\"single\" or \"multiple\"")
       .def_readwrite("products", &Task::products, "\"difference\" or \"exact\"")
+      .def_readwrite("latency", &Task::latency,
+                     "compute latency in the closed loop: \"none\", \"measured\" or a compute time in ms")
       .def(
           "to_dict", [](const Task& t) { return json_loads(to_json(t).dump()); },
           "The task as a task file's JSON object (what task_from_dict and load_task read).")

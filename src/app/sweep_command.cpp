@@ -40,6 +40,7 @@ struct SweepOptions {
   bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
   bool simd_stages = true;  // false: --no-simd-stages, every run stage by stage (the paper's arithmetic)
+  std::vector<std::string> latency = {"none"};  // the compute latencies each cell runs with (an axis)
 };
 
 // what the tables' matrix mode is, for the tables' headers
@@ -66,12 +67,13 @@ struct Cell {
   std::string settings;      // hash of everything else the cell runs with (the task as run)
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
   std::string products = "difference";  // how C/GMRES forms its products (DESIGN §11)
+  std::string latency = "none";         // compute latency (Task::latency)
   // the resume key: every axis and setting the cell runs with. A cell's ID (--list-cells, --cell)
   // is its hash, so an axis added here reaches the cell runs with no other change.
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
            (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" +
-           products + "|" + settings;
+           products + "|" + settings + (latency == "none" ? "" : "|latency " + latency);
   }
   // the solver variant, as the tables label it
   std::string variant() const {
@@ -119,6 +121,10 @@ struct CellResult {
   double tracking_tolerance = NAN;
   double mean_residual = NAN;     // mean ‖F‖ over the updates
   double closed_loop_cost = NAN;  // ∫ L dt of the task's stage cost along the run
+  // compute latency: updates run, those slower than the control period, the slowest [ms], and the
+  // tracking cost (RMS of |q - q_ref| over the run)
+  long updates = 0, deadline_misses = 0;
+  double max_ms = NAN, joint_error_rms = NAN;
 };
 
 // the paper's figure for a cell (mjcf/paper_tables.json)
@@ -161,6 +167,7 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   task.derivatives = c.derivatives;
   task.shooting = c.shooting;
   task.products = c.products;
+  task.latency = c.latency;
   task.N = c.N;
   task.kmax = c.kmax;
   task.offset_free = c.offset_free;
@@ -314,8 +321,11 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
         for (const auto& product : products) {
           for (const auto& [file, t] : tasks) {
             for (const bool offset_free : offset_free_axis(opt, t)) {
-              for (const char* f : {"fd", "id"}) {
-                cells.push_back({opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free, product});
+              for (const std::string& latency : opt.latency) {
+                for (const char* f : {"fd", "id"}) {
+                  cells.push_back(
+                      {opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free, product, latency});
+                }
               }
             }
           }
@@ -334,8 +344,10 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
           for (const char* f : {"fd", "id"}) {
             for (const auto& product : products) {
               for (const int kmax : g.kmax) {
-                cells.push_back({kWorkPrecisionTable, model, f, mode, shooting, 0, t.N, kmax, "", t.offset_free,
-                                 product});
+                for (const std::string& latency : opt.latency) {
+                  cells.push_back({kWorkPrecisionTable, model, f, mode, shooting, 0, t.N, kmax, "", t.offset_free,
+                                   product, latency});
+                }
               }
             }
           }
@@ -349,8 +361,10 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
       for (const auto& product : products) {
         for (const PaperCell& p : tables.cells) {
           if (opt.tables != "all" && p.table != opt.tables) continue;
-          cells.push_back(
-              {p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free, product});
+          for (const std::string& latency : opt.latency) {
+            cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free,
+                             product, latency});
+          }
         }
       }
     }
@@ -365,7 +379,7 @@ const std::vector<std::string> kCsvColumns = {
     "final_v_norm", "paper_ms", "paper_note", "steps", "saturated_steps", "max_constraint_violation",
     "contact_steps", "max_contact_force", "max_final_disturbance", "position_rms", "position_max",
     "orientation_rms", "orientation_max", "tracking_tolerance", "products", "mean_residual", "closed_loop_cost",
-    "settings"};
+    "latency", "updates", "deadline_misses", "max_update_ms", "joint_error_rms", "settings"};
 
 std::string csv_header() {
   std::string h;
@@ -422,6 +436,11 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   set("products", r.cell.products);
   set("mean_residual", r.mean_residual);
   set("closed_loop_cost", r.closed_loop_cost);
+  set("latency", r.cell.latency);
+  set("updates", r.updates);
+  set("deadline_misses", r.deadline_misses);
+  set("max_update_ms", r.max_ms);
+  set("joint_error_rms", r.joint_error_rms);
   set("settings", r.cell.settings);
   std::string row;
   for (const std::string& x : f) row += (row.empty() ? "" : ",") + x;
@@ -461,7 +480,8 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
     try {
       CellResult r;
       r.cell = {at("table"), at("model"), at("formulation"), at("derivatives"), at("shooting"), std::stoi(at("n")),
-                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1", at("products")};
+                std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1", at("products"),
+                at("latency")};
       r.Qa = std::stod(at("Qa"));
       r.diverged = at("diverged") == "1";
       r.diverged_at = std::stod(at("diverged_at"));
@@ -484,6 +504,10 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
       r.tracking_tolerance = std::stod(at("tracking_tolerance"));
       r.mean_residual = std::stod(at("mean_residual"));
       r.closed_loop_cost = std::stod(at("closed_loop_cost"));
+      r.updates = std::stol(at("updates"));
+      r.deadline_misses = std::stol(at("deadline_misses"));
+      r.max_ms = std::stod(at("max_update_ms"));
+      r.joint_error_rms = std::stod(at("joint_error_rms"));
       if (!keys.count(r.cell.key())) {
         throw std::invalid_argument(refuse + "results of a sweep with other settings (" + r.cell.model + " " +
                                     r.cell.formulation + " " + r.cell.variant() +
@@ -695,6 +719,84 @@ std::string tracking_markdown(const SweepOptions& opt, const std::vector<Cell>& 
         << ms(id) << " | " << fmt(fd && id ? id->mean_ms / fd->mean_ms : NAN, 2) << " | " << err(fd) << " | "
         << err(id) << " | " << deg(fd) << " / " << deg(id) << " |\n";
     }
+  }
+  return o.str();
+}
+
+// the latency table: each run under every latency of the axis side by side: deadline misses
+// (updates slower than the control period) of the updates run, mean and max ms per update, and the
+// tracking cost (RMS of |q - q_ref| over the run) against the first latency's
+std::string latency_markdown(const SweepOptions& opt, const std::vector<Cell>& cells,
+                             const std::map<std::string, CellResult>& done) {
+  // a run without its latency (whose settings differ by it alone)
+  auto run_of = [](Cell c) {
+    c.latency = "none";
+    c.settings.clear();
+    return c.key();
+  };
+  std::vector<std::string> runs;
+  std::map<std::string, const Cell*> first_cell;
+  for (const Cell& c : cells) {
+    if (first_cell.emplace(run_of(c), &c).second) runs.push_back(run_of(c));
+  }
+  auto result = [&](const std::string& run, const std::string& latency) -> const CellResult* {
+    for (const Cell& c : cells) {
+      if (c.latency == latency && run_of(c) == run) {
+        const auto it = done.find(c.key());
+        return it == done.end() ? nullptr : &it->second;
+      }
+    }
+    return nullptr;
+  };
+  const std::string& base = opt.latency.front();
+  std::ostringstream o;
+  o << "\n## Compute latency\n\n"
+    << "Every run under each `--latency`: `none` applies each torque one control period after its measurement "
+       "(the paper's timing, eqs. 27-28); `measured` applies it after the whole plant steps the update's wall "
+       "time took, the controller skipping the control steps it is still busy at; a figure in ms does the same "
+       "with that compute time. A deadline miss is an update slower than the control period (counted under "
+       "every setting: for `none` and `measured` from the wall time on this machine). Meets its rate: no "
+       "update of its `none` and `measured` runs missed the deadline. Tracking cost: RMS over the run of "
+       "|q - q_ref| [rad]; the last columns divide it by the `"
+    << base << "` run's. The tables above are of the first latency, `" << base << "`. `*` diverged.\n\n| run | f |";
+  for (const std::string& l : opt.latency) {
+    o << " " << l << ": misses / updates | " << l << ": mean / max ms | " << l << ": cost |";
+  }
+  o << " meets its rate |";
+  for (size_t k = 1; k < opt.latency.size(); ++k) o << " cost " << opt.latency[k] << " / " << base << " |";
+  o << "\n|---|---|";
+  for (size_t k = 0; k < opt.latency.size(); ++k) o << "---|---|---|";
+  o << "---|";
+  for (size_t k = 1; k < opt.latency.size(); ++k) o << "---|";
+  o << "\n";
+  for (const std::string& run : runs) {
+    const Cell& c = *first_cell.at(run);
+    o << "| " << c.model << " " << c.variant()
+      << (task_table(c.table) ? std::string(c.offset_free ? ", offset-free" : "")
+                              : " N=" + std::to_string(c.N) + " kmax=" + std::to_string(c.kmax))
+      << " | " << (c.formulation == "fd" ? "FD" : "ID") << " |";
+    bool measured = false, meets = true;
+    for (const std::string& l : opt.latency) {
+      const CellResult* r = result(run, l);
+      if (!r) {
+        o << " – | – | – |";
+        continue;
+      }
+      if (l == "none" || l == "measured") {
+        measured = true;
+        meets = meets && r->deadline_misses == 0 && !r->diverged;
+      }
+      o << " " << r->deadline_misses << " / " << r->updates << " | " << fmt(r->mean_ms) << " / " << fmt(r->max_ms)
+        << " | " << fmt(r->joint_error_rms) << (r->diverged ? "*" : "") << " |";
+    }
+    o << " " << (measured ? (meets ? "yes" : "no") : "–") << " |";
+    const CellResult* first = result(run, base);
+    for (size_t k = 1; k < opt.latency.size(); ++k) {
+      const CellResult* r = result(run, opt.latency[k]);
+      o << " " << fmt(first && r && !first->diverged && !r->diverged ? r->joint_error_rms / first->joint_error_rms : NAN, 3)
+        << " |";
+    }
+    o << "\n";
   }
   return o.str();
 }
@@ -961,6 +1063,14 @@ std::string markdown(const PaperTables& tables, const std::vector<Cell>& cells,
   return o.str();
 }
 
+// the tables of the grid, with the latency table when the latency axis has more than none
+std::string markdown_with_latency(const PaperTables& tables, const std::vector<Cell>& cells,
+                                  const std::map<std::string, CellResult>& done, const SweepOptions& opt) {
+  const std::string tables_md = markdown(tables, cells, done, opt);
+  if (opt.latency == std::vector<std::string>{"none"}) return tables_md;
+  return tables_md + latency_markdown(opt, cells, done);
+}
+
 CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   const Task task = cell_task(base, c, opt);
   std::string log;
@@ -970,8 +1080,9 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
     std::replace(name.begin(), name.end(), '/', '_');
     log = opt.out_dir + "/log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
           (c.shooting == "single" ? "" : "_" + c.shooting) + (c.products == "difference" ? "" : "_" + c.products) +
-          "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) + (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
-          ".csv";
+          "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) +
+          (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
+          (c.latency == "none" ? "" : "_latency_" + c.latency) + ".csv";
   }
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
   const RunSummary s = run_swingup(task, log, true).summary;
@@ -994,6 +1105,10 @@ CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   r.max_contact_force = s.max_contact_force;
   r.mean_residual = s.mean_residual;
   r.closed_loop_cost = s.closed_loop_cost;
+  r.max_ms = s.max_update_ms;
+  r.updates = s.updates;
+  r.deadline_misses = s.deadline_misses;
+  r.joint_error_rms = s.joint_error_rms;
   r.final_disturbance = 0;
   for (double d : s.final_disturbance) r.final_disturbance = std::max(r.final_disturbance, std::abs(d));
   if (s.tracking) {
@@ -1020,7 +1135,21 @@ CellResult run_cell_after_progress(const Task& base, const Cell& c, const SweepO
 std::string cell_label(const Cell& c) {
   return c.model + " " + (c.formulation == "fd" ? "FD" : "ID") + " " + c.variant() +
          (task_table(c.table) ? (c.offset_free ? ", offset-free on" : ", offset-free off") : "") +
-         " N=" + std::to_string(c.N) + " kmax=" + std::to_string(c.kmax);
+         (c.latency == "none" ? "" : ", latency " + c.latency) + " N=" + std::to_string(c.N) +
+         " kmax=" + std::to_string(c.kmax);
+}
+
+// the --latency axis: each value once, as parse_latency reads it back ("1.0" is "1")
+std::vector<std::string> latency_axis(const std::vector<std::string>& values) {
+  std::vector<std::string> axis;
+  for (const std::string& l : values) {
+    const std::string value = to_string(parse_latency(l));
+    if (std::find(axis.begin(), axis.end(), value) != axis.end()) {
+      throw std::invalid_argument("--latency lists '" + value + "' twice");
+    }
+    axis.push_back(value);
+  }
+  return axis;
 }
 
 // a sweep of the chosen options: the grid, each cell keyed, and what its cells run on
@@ -1076,7 +1205,7 @@ void write_csv(const Sweep& s, const std::map<std::string, CellResult>& done) {
 
 void write_markdown(const Sweep& s, const std::map<std::string, CellResult>& done) {
   AtomicFile f(s.md);
-  f.stream() << markdown(s.tables, s.cells, done, s.opt);
+  f.stream() << markdown_with_latency(s.tables, s.cells, done, s.opt);
   f.commit();
 }
 
@@ -1127,7 +1256,7 @@ void run_serial(const SweepOptions& opt) {
     write_markdown(s, done);
   }
   write_markdown(s, done);
-  std::cout << markdown(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
+  std::cout << markdown_with_latency(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
 }
 
 // the cell a run names by its ID
@@ -1211,7 +1340,7 @@ void merge(const SweepOptions& opt) {
   read_finished(s.csv, s.cells);  // a table of another sweep is refused, never overwritten
   write_csv(s, done);
   write_markdown(s, done);
-  std::cout << markdown(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
+  std::cout << markdown_with_latency(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
 }
 
 }  // namespace
@@ -1251,6 +1380,13 @@ void register_sweep(CLI::App& app) {
   CLI::Option* duration =
       sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")
           ->capture_default_str();
+  sub->add_option("--latency", opt->latency,
+                  "compute latency of every run, one value or several (an axis, comma-separated): none (the "
+                  "paper's timing), measured (each update's wall time) or a compute time in ms; the tables are "
+                  "of the first value, a latency table compares them all")
+      ->delimiter(',')
+      ->check(latency_check())
+      ->capture_default_str();
   sub->add_flag("--logs", opt->logs, "keep each run's CSV log in the output directory");
   sub->add_flag("!--no-simd-stages", opt->simd_stages,
                 "every run evaluates its horizon stages one by one instead of in SIMD lanes: matrix mode is then "
@@ -1273,6 +1409,7 @@ void register_sweep(CLI::App& app) {
   sub->callback([opt, duration, tables, arms_tasks, list, one, merged, cell] {
     opt->duration_given = duration->count() > 0;
     if (arms_tasks->count() > 0 && tables->count() == 0) opt->tables = kArmsTable;
+    opt->latency = latency_axis(opt->latency);
     if (list->count() > 0) {
       list_cells(*opt);
     } else if (one->count() > 0) {

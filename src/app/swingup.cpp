@@ -14,6 +14,19 @@
 
 namespace idmpc::app {
 
+CLI::Validator latency_check() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        try {
+          value = to_string(parse_latency(value));
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      "");
+}
+
 void add_task_options(CLI::App& sub, TaskOverrides& o) {
   Task& t = o.values;
   sub.add_option("model", o.model, "MJCF/URDF model file (default: the task's model)");
@@ -84,6 +97,12 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_option("--reach-tolerance", t.reach_tolerance,
                      "the target is reached when max|q - qref| at the end is below this"),
       [](const Task& s, Task& d) { d.reach_tolerance = s.reach_tolerance; });
+  add(sub.add_option("--latency", t.latency,
+                     "compute latency in the closed loop: none (the paper's timing: each torque applied one period "
+                     "after its measurement), measured (each update's wall time) or a compute time in ms; the "
+                     "torque then reaches the plant after the whole plant steps its computation took")
+          ->check(latency_check()),
+      [](const Task& s, Task& d) { d.latency = to_string(parse_latency(s.latency)); });
   add(sub.add_flag("!--no-simd-stages", t.simd_stages,
                    "evaluate the horizon stages one by one instead of in SIMD lanes (ID; FD matrix; FD "
                    "adjoint under multiple shooting): the paper's arithmetic"),
@@ -164,6 +183,10 @@ std::string human_summary(const RunSummary& s) {
   o << "  update time [ms]: mean " << s.mean_update_ms << ", p50 " << s.p50_update_ms << ", p95 "
     << s.p95_update_ms << ", max " << s.max_update_ms << "  (" << s.evaluations_per_update
     << " F evaluations)\n";
+  if (s.task.latency != "none" || s.deadline_misses > 0) {
+    o << "  compute latency " << s.task.latency << ": " << s.deadline_misses
+      << " update(s) took longer than the control period of " << s.control_period_ms << " ms (deadline misses)\n";
+  }
   o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
   o << "  final max|q - qref| = " << s.final_q_error << ", |v| = " << s.final_v_norm
     << ", mean residual " << s.mean_residual << "\n";

@@ -24,6 +24,9 @@ struct TaskOverrides {
   std::vector<std::pair<CLI::Option*, void (*)(const Task&, Task&)>> given;
 };
 
+/// @brief The check of a --latency value (parse_latency): none, measured or a compute time in ms.
+CLI::Validator latency_check();
+
 /// @brief Adds --task, MODEL and the task options (--formulation, --N, --Qq, …) to a command.
 void add_task_options(CLI::App& sub, TaskOverrides& o);
 

@@ -149,6 +149,24 @@ TEST_F(InputErrors, NumericOptionsAcceptDecimalNumbers) {
   EXPECT_NE(ok.out.find("N = 10, kmax = 2"), std::string::npos) << ok.out;
 }
 
+TEST_F(InputErrors, LatencyIsNoneMeasuredOrMilliseconds) {
+  for (const std::string bad : {"-1", "fast", "''", "inf", "nan", "1e999", "010"}) {
+    SCOPED_TRACE(bad);
+    expect_one_line(idmpc("swingup --duration 0.002 --latency " + bad), {"--latency", "got"});
+  }
+  expect_one_line(idmpc("sweep --out out --latency none,-2"), {"--latency", "'-2'"});
+  expect_one_line(idmpc("sweep --out out --latency none,1,1.0"), {"--latency", "'1' twice"});
+  // (a non-finite number is no JSON: 1e999 is refused as the file's parse error)
+  for (const std::string bad : {"-1", "\"fast\"", "\"\"", "[1]", "\"inf\""}) {
+    SCOPED_TRACE(bad);
+    write("late.json", R"({"model": ")" + kArm4 + R"(", "q0": [0, 0, 0, 0], "latency": )" + bad + "}");
+    expect_one_line(idmpc("swingup --task late.json --duration 0.002"), {"task file 'late.json'", "field 'latency'"});
+  }
+  const test::CommandResult ok = idmpc("swingup --duration 0.003 --latency 2.5");
+  EXPECT_NE(ok.code, 1) << ok.err;
+  EXPECT_NE(ok.out.find("compute latency 2.5: 1 update(s) took longer"), std::string::npos) << ok.out;
+}
+
 // ---------------------------------------------------------------------------------------------
 // models: include cycles, devices, FIFOs, directories, permissions
 

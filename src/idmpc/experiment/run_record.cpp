@@ -325,6 +325,11 @@ nlohmann::json to_json(const RunSummary& s) {
   j["p95_update_ms"] = s.p95_update_ms;
   j["max_update_ms"] = s.max_update_ms;
   j["phase_ms"] = {{"rollout", s.rollout_ms}, {"costate", s.costate_ms}, {"gmres", s.gmres_ms}};
+  j["latency"] = {{"setting", s.task.latency},
+                  {"control_period_ms", s.control_period_ms},
+                  {"updates", s.updates},
+                  {"deadline_misses", s.deadline_misses}};
+  j["joint_error_rms"] = s.joint_error_rms;
   j["evaluations_per_update"] = s.evaluations_per_update;
   j["init_residual"] = s.init_residual;
   j["final_q_error"] = s.final_q_error;
@@ -417,6 +422,12 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
                                   t.at("orientation_rms").get<double>(), t.at("orientation_max").get<double>(),
                                   t.at("final_position_error").get<double>(), t.at("samples").get<long>()};
     }
+    if (j.contains("latency")) {
+      s.control_period_ms = j.at("latency").at("control_period_ms").get<double>();
+      s.updates = j.at("latency").at("updates").get<long>();
+      s.deadline_misses = j.at("latency").at("deadline_misses").get<long>();
+    }
+    s.joint_error_rms = j.value("joint_error_rms", 0.0);
     s.contact_steps = j.value("contact_steps", 0L);
     s.max_contact_force = j.value("max_contact_force", 0.0);
     s.final_disturbance = j.value("final_disturbance", std::vector<double>{});

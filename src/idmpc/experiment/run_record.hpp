@@ -63,6 +63,13 @@ struct RunSummary {
   std::string divergence_reason;
   std::string divergence_hint;  ///< what to try (divergence_hint(task)), empty unless diverged
   double mean_update_ms = 0, p50_update_ms = 0, p95_update_ms = 0, max_update_ms = 0;
+  /// @brief The compute latency the run had ("none", "measured" or ms; task.latency) and the
+  /// updates whose compute time exceeded the control period (deadline misses; counted with any
+  /// setting, "latency" in the JSON)
+  long updates = 0, deadline_misses = 0;
+  double control_period_ms = 0;
+  /// @brief RMS over the control steps of ‖q − q_ref(t)‖: the run's tracking cost
+  double joint_error_rms = 0;
   double rollout_ms = 0, costate_ms = 0, gmres_ms = 0;  ///< mean per update
   int evaluations_per_update = 0;
   double init_residual = 0, final_q_error = 0, final_v_norm = 0, mean_residual = 0;

@@ -149,7 +149,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
            "simd_stages", "direct_torque", "actuate_every_joint", "implicit_damping", "friction_velocity",
            "offset_free", "observer_time_constant", "reach_tolerance", "torque_limit", "weights", "cgmres",
-           "target", "reference", "tracking_tolerance"});
+           "target", "reference", "tracking_tolerance", "latency"});
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
@@ -221,6 +221,24 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   r.get("offset_free", t.offset_free);
   r.get("observer_time_constant", t.observer_time_constant);
   r.get("reach_tolerance", t.reach_tolerance);
+  if (r.has("latency")) {
+    // "none", "measured" or a compute time in ms (a number, or its text)
+    const json& v = j.at("latency");
+    const char* expected = "\"none\", \"measured\" or a compute time in ms (a finite number >= 0)";
+    if (v.is_number()) {
+      const double ms = v.get<double>();
+      if (!(ms >= 0) || !std::isfinite(ms)) r.bad("latency", expected);
+      t.latency = to_string(Latency{Latency::Kind::kFixed, ms});
+    } else if (v.is_string()) {
+      try {
+        t.latency = to_string(parse_latency(v.get<std::string>()));
+      } catch (const std::invalid_argument&) {
+        r.bad("latency", expected);
+      }
+    } else {
+      r.bad("latency", expected);
+    }
+  }
   if (r.has("torque_limit")) r.get("torque_limit", t.torque_limit);
   if (r.has("weights")) {
     const Reader w = r.sub("weights");
@@ -316,6 +334,11 @@ nlohmann::json to_json(const Task& t) {
   j["offset_free"] = t.offset_free;
   j["observer_time_constant"] = t.observer_time_constant;
   j["reach_tolerance"] = t.reach_tolerance;
+  // written only when on: a task without latency reads and hashes as it always has
+  if (t.latency != "none") {
+    const Latency latency = parse_latency(t.latency);
+    j["latency"] = latency.kind == Latency::Kind::kFixed ? json(latency.ms) : json(t.latency);
+  }
   if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
   j["weights"] = {{"Qq", or_auto(t.Qq)}, {"Qv", or_auto(t.Qv)}, {"Qa", t.Qa}, {"R", or_auto(t.R)},
                   {"Qa_fallback", t.Qa_fallback}};
@@ -335,7 +358,7 @@ ResolvedTask resolve(const Task& t, int n) {
   for (const auto& [word, name] : words) {
     if (word.size() > kMaxShownChars) throw std::invalid_argument(std::string(name) + ": unknown value '" + abbreviate(word) + "'");
   }
-  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}};
+  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}, {}};
   // bounded before anything is sized from it
   if (t.N < 1 || t.N > kMaxHorizonSteps) {
     throw std::invalid_argument("--N (cgmres.N) must be from 1 to " + std::to_string(kMaxHorizonSteps) +
@@ -446,6 +469,11 @@ ResolvedTask resolve(const Task& t, int n) {
   }
   if (!(t.tracking_tolerance > 0) || !std::isfinite(t.tracking_tolerance)) {
     throw std::invalid_argument("tracking_tolerance must be positive and finite [m], got " + text(t.tracking_tolerance));
+  }
+  try {
+    r.latency = parse_latency(t.latency);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--latency (latency): ") + e.what());
   }
   if (!(t.reach_tolerance >= 0) || !std::isfinite(t.reach_tolerance)) {
     throw std::invalid_argument("--reach-tolerance (reach_tolerance) must be non-negative and finite, got " +

@@ -44,6 +44,10 @@
 ///                  else qref (one value per joint); it starts at the target's start value
 ///   "tracking_tolerance" a frame target counts as reached when the position error [m] is
 ///                  below it: its RMS over the run with a reference, at the end without
+///   "latency"      compute latency in the closed loop (DESIGN §11): "none" (the paper's timing, the
+///                  default), "measured" (each update's wall time) or a compute time in ms (a
+///                  number): the torque of an update reaches the plant ⌈t_compute/δt⌉ plant steps
+///                  after its measurement (mj::ClosedLoopSettings::latency)
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
 ///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
@@ -55,6 +59,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "idmpc/experiment/latency.hpp"
 #include "idmpc/ocp/problem.hpp"
 #include "idmpc/solver/cgmres.hpp"
 
@@ -100,6 +105,7 @@ struct Task {
   bool init_full_horizon = false;
   std::string shooting;  ///< "single" or "multiple"
   std::string products;  ///< "difference" or "exact" (DESIGN §11)
+  std::string latency = "none";  ///< "none", "measured" or a compute time in ms (parse_latency)
 };
 
 /// @brief The paper's swing-up task file, mjcf/paper_swingup.json of the data directory
@@ -136,6 +142,7 @@ struct ResolvedTask {
   OcpWeights weights;              ///< Qq, Qv, R of size 0 where the task says "auto"
   VecX<double> friction_velocity;  ///< size n, or size 0 for "auto"
   CgmresSettings cgmres;
+  Latency latency;                 ///< compute latency in the closed loop (none by default)
   std::vector<std::string> warnings;  ///< settings accepted but without effect (e.g. Q_a in FD)
 };
 /// @brief Throws std::invalid_argument naming the field (a scalar or n values expected,

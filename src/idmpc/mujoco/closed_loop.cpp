@@ -52,6 +52,12 @@ class TrackingMeter {
     s_.joints->sample(t, q_ref_, rate_);
     return (q - q_ref_).cwiseAbs().maxCoeff();
   }
+  // ‖q − q_ref‖² at t
+  double joint_error_squared(double t, const VecX<double>& q, const Controller& c) {
+    if (!s_.joints) return (q - c.q_ref()).squaredNorm();
+    s_.joints->sample(t, q_ref_, rate_);
+    return (q - q_ref_).squaredNorm();
+  }
 
   std::optional<TrackingResult> result() const {
     if (!s_.frame()) return std::nullopt;
@@ -129,43 +135,102 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     result.final_v_norm = v.norm();
     return result;
   }
-  double residual_sum = 0;
+  double residual_sum = 0, error_sum = 0;
   UpdateTimes phase_sum;
+  const double period_ms = 1e3 * dt;
+
+  // compute latency (DESIGN §11): plant steps are counted in MuJoCo steps δt, `substeps` per
+  // control period; the torque of the last update waits for its arrival, the controller is busy
+  // until control step `free_at`, and the observer learns the mean torque the plant applied since
+  // the last update's measurement
+  const bool late = settings.latency.on();
+  const long substeps = plant.substeps();
+  const double plant_dt = dt / static_cast<double>(substeps);
+  long free_at = 0, arrival = -1, last_update = -1, applied_steps = 0;
+  VecX<double> pending = tau, pending_cmd = tau_cmd, applied_mean = tau;
+  auto applied = [&](const VecX<double>& x, long count) {
+    if (count == 0) return;
+    applied_steps += count;
+    // a running mean, exact while the torque does not change
+    if (applied_steps == count) {
+      applied_mean = x;
+    } else {
+      applied_mean += (x - applied_mean) * (static_cast<double>(count) / static_cast<double>(applied_steps));
+    }
+  };
 
   for (long k = 0; k < steps; ++k) {
     const double t = static_cast<double>(k) * dt;
     q = plant.q();
     v = plant.v();
     const bool tracked = meter.measure(t, q);
-    // one control update at t: the torque for t + Δt
-    const auto start = std::chrono::steady_clock::now();
-    const bool ok = controller.update(t, q, v);
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    error_sum += meter.joint_error_squared(t, q, controller);
+    const long first = k * substeps;  // the plant step at t
+    if (late && arrival == first) {
+      tau = pending;
+      tau_cmd = pending_cmd;
+      arrival = -1;
+    }
+    // one control update at t: the torque for t + Δt (latency: for when it is computed)
+    const bool updating = !late || k >= free_at;
+    double ms = std::numeric_limits<double>::quiet_NaN();
+    bool ok = true;
+    if (updating) {
+      const auto start = std::chrono::steady_clock::now();
+      ok = late && last_update >= 0
+               ? controller.update(t, q, v, static_cast<double>(k - last_update) * dt, applied_mean)
+               : controller.update(t, q, v);
+      ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+      const double compute_ms = settings.latency.kind == Latency::Kind::kFixed ? settings.latency.ms : ms;
+      if (ok && compute_ms > period_ms) ++result.deadline_misses;
+      if (ok && late) {
+        // its torque reaches the plant after the whole plant steps its computation took
+        const double ratio = 1e-3 * compute_ms / plant_dt;
+        const long delay = std::max(0L, static_cast<long>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio))));
+        free_at = k + std::max(1L, (delay + substeps - 1) / substeps);
+        ok = controller.aim(dt * (static_cast<double>(delay) / static_cast<double>(substeps)));
+        pending = controller.torque();
+        pending_cmd = controller.commanded_torque();
+        arrival = first + delay;
+        if (delay == 0) {
+          tau = pending;
+          tau_cmd = pending_cmd;
+          arrival = -1;
+        }
+        last_update = k;
+        applied_steps = 0;
+      }
+    }
 
     std::string reason = ok ? "" : controller.failure();
-    // the row holds the measured state, the torque applied over [t, t + Δt) and this update
+    // the row holds the measured state, the torque applied at t (over [t, t + Δt) unless a late
+    // torque arrives within the period) and this update
     on_step(StepRecord{t, q, v, tau, tau_cmd, controller.residual_norm(), ms, tracked ? &meter.position() : nullptr,
                        tracked ? &meter.target() : nullptr});
     result.steps = static_cast<int>(k + 1);
     if (reason.empty()) {
-      ++result.updates;
-      result.mean_update_ms += (ms - result.mean_update_ms) / static_cast<double>(result.updates);
-      result.max_update_ms = std::max(result.max_update_ms, ms);
-      if (result.updates <= kept) {
-        result.update_ms.push_back(ms);
-      } else {
-        const auto slot = std::uniform_int_distribution<long>(0, result.updates - 1)(sampler);
-        if (slot < kept) result.update_ms[static_cast<size_t>(slot)] = ms;
+      if (updating) {
+        ++result.updates;
+        result.mean_update_ms += (ms - result.mean_update_ms) / static_cast<double>(result.updates);
+        result.max_update_ms = std::max(result.max_update_ms, ms);
+        if (result.updates <= kept) {
+          result.update_ms.push_back(ms);
+        } else {
+          const auto slot = std::uniform_int_distribution<long>(0, result.updates - 1)(sampler);
+          if (slot < kept) result.update_ms[static_cast<size_t>(slot)] = ms;
+        }
+        residual_sum += controller.residual_norm();
+        result.max_constraint_violation =
+            std::max(result.max_constraint_violation, controller.constraint_violation());
+        const UpdateTimes& ph = controller.solver().last_times();
+        phase_sum.total += ph.total;
+        phase_sum.rollout += ph.rollout;
+        phase_sum.costate += ph.costate;
+        phase_sum.gmres += ph.gmres;
+        result.evaluations_per_update = controller.solver().evaluations();
       }
-      residual_sum += controller.residual_norm();
+      // the task's stage cost of the measured state and the torque applied from it, every step
       result.closed_loop_cost += dt * controller.stage_cost(q, v, tau);
-      result.max_constraint_violation = std::max(result.max_constraint_violation, controller.constraint_violation());
-      const UpdateTimes& ph = controller.solver().last_times();
-      phase_sum.total += ph.total;
-      phase_sum.rollout += ph.rollout;
-      phase_sum.costate += ph.costate;
-      phase_sum.gmres += ph.gmres;
-      result.evaluations_per_update = controller.solver().evaluations();
       // saturation of the torque applied over this step
       bool any = false;
       for (int j = 0; j < n; ++j) {
@@ -175,7 +240,22 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
         }
       }
       result.saturated_any += any;
-      if (!plant.step(tau, &reason)) {
+      bool stepped = false;
+      if (!late) {
+        stepped = plant.step(tau, &reason);
+      } else {
+        // a late torque arriving within the period takes over from its plant step on
+        const long switch_at = arrival >= first && arrival < first + substeps ? arrival - first : substeps;
+        stepped = plant.step(tau, static_cast<int>(switch_at), pending, &reason);
+        applied(tau, switch_at);
+        applied(pending, substeps - switch_at);
+        if (switch_at < substeps) {
+          tau = pending;
+          tau_cmd = pending_cmd;
+          arrival = -1;
+        }
+      }
+      if (!stepped) {
         // the plant blew up under this torque: reason says how
       } else if (plant.v().cwiseAbs().maxCoeff() > kMaxSpeed) {
         reason = "joint speed exceeded 1e4";
@@ -187,8 +267,10 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
       result.divergence_reason = reason;
       break;
     }
-    tau = controller.torque();
-    tau_cmd = controller.commanded_torque();
+    if (!late) {
+      tau = controller.torque();
+      tau_cmd = controller.commanded_torque();
+    }
   }
 
   const double m = std::max<double>(1.0, static_cast<double>(result.updates));
@@ -203,6 +285,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   if (!result.diverged) meter.measure(t_end, result.final_q);  // the state the run ends in
   result.tracking = meter.result();
   result.final_v_norm = result.final_v.norm();
+  result.joint_error_rms = std::sqrt(error_sum / std::max<double>(1.0, static_cast<double>(result.steps)));
   result.contact_steps = plant.contact_steps();
   result.max_contact_force = plant.max_contact_force();
   result.final_disturbance = controller.disturbance();

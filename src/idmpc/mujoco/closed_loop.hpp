@@ -1,7 +1,8 @@
 #pragma once
 /// @file closed_loop.hpp
 /// @brief Simulation in the loop: every Δt the controller reads (q, v) from the MuJoCo plant,
-/// runs one C/GMRES update and applies its torque for one plant step (DESIGN §6).
+/// runs one C/GMRES update and applies its torque for one plant step (DESIGN §6), or, with
+/// compute latency, as soon as its computation ends (DESIGN §11).
 
 #include <functional>
 #include <limits>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "idmpc/experiment/latency.hpp"
 #include "idmpc/experiment/run_record.hpp"
 #include "idmpc/mujoco/plant.hpp"
 #include "idmpc/solver/controller.hpp"
@@ -40,6 +42,14 @@ struct ClosedLoopSettings {
   bool phase_timing = true;  ///< split each update's time into rollout/costate/GMRES
   long kept_update_times = kKeptUpdateTimes;  ///< RunResult::update_ms keeps at most this many
   TrackingSettings tracking;  ///< what the tracking error is measured against (none by default)
+  /// @brief Compute latency (DESIGN §11). none: the paper's timing, every update's torque applied
+  /// over the period after its measurement. On: the torque computed from the state measured at t
+  /// reaches the plant at t + ⌈t_compute/δt⌉·δt (δt the plant's MuJoCo step; t_compute the
+  /// update's wall time, or the fixed figure) and is held until the next one arrives; the
+  /// controller starts an update only at a control step when it is not busy with the previous
+  /// one, and aims its torque at the actual delay (Controller::aim). Until the first update's
+  /// torque arrives the plant holds the initialization's torque.
+  Latency latency;
 };
 
 /// @brief One control step as logged: measured state, the torque the plant applied over
@@ -52,7 +62,7 @@ struct StepRecord {
   const VecX<double>& u;
   const VecX<double>& u_commanded;
   double residual;
-  double update_ms;
+  double update_ms;  ///< NaN at a step where no update started (the controller still busy, latency on)
   /// @brief With a frame target (TrackingSettings): the frame's measured position and its target
   /// at t; null otherwise.
   const Vec3<double>* frame_position = nullptr;
@@ -71,6 +81,11 @@ struct RunResult {
   long updates = 0;                 ///< successful updates
   double mean_update_ms = 0;        ///< over all of them (exact)
   double max_update_ms = 0;         ///< over all of them (exact)
+  /// @brief Updates whose compute time (measured, or the fixed latency) exceeded the control
+  /// period Δt: deadline misses at the control rate, counted with latency on or off.
+  long deadline_misses = 0;
+  /// @brief RMS over the control steps of ‖q − q_ref(t)‖ [rad or m]: the run's tracking cost.
+  double joint_error_rms = 0;
   double init_residual = 0;         ///< ‖F_0‖ after the zero-horizon Newton solve
   double mean_residual = 0;
   /// @brief ∫ L dt of the task's stage cost (Controller::stage_cost) along the measured

@@ -46,11 +46,7 @@ void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
   max_contact_force_ = 0;
 }
 
-bool Plant::step(const VecX<double>& tau, std::string* reason) {
-  if (!tau.allFinite()) {
-    if (reason) *reason = "non-finite torque";
-    return false;
-  }
+void Plant::apply(const VecX<double>& tau) {
   if (actuation_.direct) {
     mju_copy(d_->qfrc_applied, tau.data(), m_->nv);
   } else {
@@ -58,10 +54,25 @@ bool Plant::step(const VecX<double>& tau, std::string* reason) {
       d_->ctrl[actuation_.actuator_of_dof[i]] = tau[i] * actuation_.ctrl_per_torque[i];
     }
   }
+}
+
+bool Plant::step(const VecX<double>& tau, std::string* reason) { return step(tau, substeps_, tau, reason); }
+
+bool Plant::step(const VecX<double>& tau_before, int switch_at, const VecX<double>& tau_after, std::string* reason) {
+  if (switch_at < 0 || switch_at > substeps_) {
+    throw std::invalid_argument("Plant::step: the torque switches after " + std::to_string(switch_at) +
+                                " substeps, expected 0 to " + std::to_string(substeps_));
+  }
+  if (!tau_before.allFinite() || !tau_after.allFinite()) {
+    if (reason) *reason = "non-finite torque";
+    return false;
+  }
+  apply(switch_at > 0 ? tau_before : tau_after);
   int warnings_before = 0;
   for (int w = 0; w < mjNWARNING; ++w) warnings_before += d_->warning[w].number;
   bool contact = false;
   for (int k = 0; k < substeps_; ++k) {
+    if (k == switch_at && k > 0) apply(tau_after);
     mj_step(m_.get(), d_.get());
     for (int c = 0; c < d_->ncon; ++c) {
       mjtNum force[6];

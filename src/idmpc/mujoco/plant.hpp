@@ -26,6 +26,10 @@ class Plant {
   /// @brief Applies τ (through the motors or qfrc_applied) for one step. Returns false with
   /// a reason if the state became non-finite or MuJoCo raised a warning (e.g. bad qacc).
   bool step(const VecX<double>& tau, std::string* reason);
+  /// @brief One step whose torque changes within it, as a late torque arrives (compute latency,
+  /// DESIGN §11): τ_before for the first `switch_at` of its substeps() MuJoCo steps (0 to
+  /// substeps()), τ_after for the rest. Returns as step().
+  bool step(const VecX<double>& tau_before, int switch_at, const VecX<double>& tau_after, std::string* reason);
 
   /// @brief Control steps since reset() during which MuJoCo had at least one contact, and the
   /// largest contact normal force seen [N] (mj_contactForce).
@@ -40,6 +44,9 @@ class Plant {
  private:
   ModelPtr m_;
   DataPtr d_;
+  // applies τ to the actuators or qfrc_applied
+  void apply(const VecX<double>& tau);
+
   Actuation actuation_;
   int substeps_ = 1;
   long contact_steps_ = 0;

@@ -142,6 +142,7 @@ ClosedLoopSettings TaskRun::loop_settings() const {
   ls.q0 = resolved_.q0;
   ls.v0 = VecX<double>::Zero(n());
   ls.tracking = tracking_;
+  ls.latency = resolved_.latency;
   return ls;
 }
 
@@ -169,6 +170,10 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.p50_update_ms = percentile(ms, 50);
   s.p95_update_ms = percentile(ms, 95);
   s.max_update_ms = result.updates > 0 ? result.max_update_ms : std::numeric_limits<double>::quiet_NaN();
+  s.updates = result.updates;
+  s.deadline_misses = result.deadline_misses;
+  s.control_period_ms = 1e3 * c.dt();
+  s.joint_error_rms = result.joint_error_rms;
   s.rollout_ms = result.mean_phase_ms.rollout;
   s.costate_ms = result.mean_phase_ms.costate;
   s.gmres_ms = result.mean_phase_ms.gmres;

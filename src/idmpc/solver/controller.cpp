@@ -74,8 +74,8 @@ Controller::Controller(OcpProblem problem, const CgmresSettings& settings, std::
                                 std::to_string(nlp_.n()));
   }
   const int n = nlp_.n();
-  for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_, &q_prev_, &v_prev_, &tau_last_, &tau_pending_,
-                 &d_hat_, &a_meas_}) {
+  for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_, &q_meas_, &v_meas_, &a0_rule_, &q_prev_, &v_prev_,
+                 &tau_last_, &tau_pending_, &d_hat_, &a_meas_}) {
     *x = Vec::Zero(n);
   }
   // the clamp: the horizon's bounds where it has them
@@ -136,16 +136,16 @@ void Controller::set_disturbance_observer(double time_constant) {
   observer_time_constant_ = time_constant;
 }
 
-void Controller::observe(In q, In v) {
-  const double dt = this->dt();
+void Controller::observe(In q, In v, double interval, In tau_applied) {
+  const double dt = interval;
   if (observer_time_constant_ > 0 && have_previous_) {
-    // the torque the model misses over the last period: model torque at the measured
+    // the torque the model misses over the last interval: model torque at the measured
     // acceleration minus what the plant applied
     a_meas_ = (v - v_prev_) / dt;
     const double beta = std::min(1.0, dt / observer_time_constant_);
     const Vec& tau_model = rnea(*plant_model_, data_, q_prev_, v_prev_, a_meas_);
     for (int j = 0; j < n(); ++j) {
-      const double raw = tau_model[j] - tau_last_[j];
+      const double raw = tau_model[j] - tau_applied[j];
       // bounded by what the actuator could counter: a blown-up measurement cannot wind it up
       const double bound = std::max(std::abs(lower_[j]), std::abs(upper_[j]));
       d_hat_[j] = std::clamp(d_hat_[j] + beta * (raw - d_hat_[j]), -bound, bound);
@@ -187,20 +187,52 @@ const VecX<double>& Controller::initialize(In q, In v) {
 bool Controller::update(double t, In q, In v) {
   IDMPC_CHECK_ARGUMENT(q.size() == n() && v.size() == n(), "Controller::update: q and v must have size n");
   failure_.clear();
-  observe(q, v);
+  observe(q, v, dt(), tau_last_);
   if (!solver_.update(t, q, v)) {
     failure_ = solver_.failure();
     return false;
   }
+  return finish_update(q, v);
+}
+
+bool Controller::update(double t, In q, In v, double interval, In tau_applied) {
+  IDMPC_CHECK_ARGUMENT(q.size() == n() && v.size() == n() && tau_applied.size() == n(),
+                       "Controller::update: q, v and tau_applied must have size n");
+  IDMPC_CHECK_ARGUMENT(interval > 0 && std::isfinite(interval), "Controller::update: interval must be positive");
+  failure_.clear();
+  observe(q, v, interval, tau_applied);
+  if (!solver_.update(t, q, v)) {
+    failure_ = solver_.failure();
+    return false;
+  }
+  return finish_update(q, v);
+}
+
+bool Controller::finish_update(In q, In v) {
   torque_rule(q, v, a0_hat_, dt());
   if (!tau_cmd_.allFinite()) {
     failure_ = "non-finite torque";
     return false;
   }
+  q_meas_ = q;
+  v_meas_ = v;
+  a0_rule_ = a0_hat_;
   // the new solution is the one executed from now on
   if (nlp_.formulation() == Formulation::kInverseDynamics) a0_hat_ = solver_.solution().head(n());
   // the torque of the current period [t, t + Δt) is the one this update's successor observes
   tau_last_ = tau_pending_;
+  tau_pending_ = tau_;
+  return true;
+}
+
+bool Controller::aim(double delay) {
+  IDMPC_CHECK_ARGUMENT(delay >= 0 && std::isfinite(delay), "Controller::aim: delay must be >= 0 and finite");
+  failure_.clear();
+  torque_rule(q_meas_, v_meas_, a0_rule_, delay);
+  if (!tau_cmd_.allFinite()) {
+    failure_ = "non-finite torque";
+    return false;
+  }
   tau_pending_ = tau_;
   return true;
 }

@@ -91,6 +91,19 @@ class Controller {
   /// and torque() is τ(t + Δt); on divergence returns false and failure() says why.
   bool update(double t, In q, In v);
 
+  /// @brief One control update in a loop whose torques arrive late (compute latency, DESIGN
+  /// §11): as update(t, q, v), but the observer learns what the plant did since the previous
+  /// measurement, `interval` seconds (> 0) under the mean torque `tau_applied`, instead of
+  /// assuming one period under the previous update's torque.
+  bool update(double t, In q, In v, double interval, In tau_applied);
+
+  /// @brief After a successful update: aims its torque at the instant it reaches the plant,
+  /// `delay` seconds (>= 0) after its measurement: eqs. 27–28 predict the state over `delay` instead of Δt. The
+  /// rule stays the formulation's own: ID's ID(q + delay·v, v + delay·â_0, a_0) − d̂ moves with
+  /// the delay, FD's u_0 has no prediction to move. torque() and commanded_torque() change
+  /// (clamped as always); returns false with failure() for a non-finite torque.
+  bool aim(double delay);
+
   /// @brief Actuator limits: every torque the controller returns lies in [lower, upper]
   /// (±infinity: unbounded). Throws std::invalid_argument for sizes other than n, NaN,
   /// lower ≥ upper, or a joint the horizon bounds (OcpProblem's torque limits) with other limits.
@@ -137,8 +150,11 @@ class Controller {
   // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given), then
   // clamped to the actuator limits
   void torque_rule(In q, In v, In a0_hat, double dt);
-  // the observer's step from the previous measurement to (q, v)
-  void observe(In q, In v);
+  // the observer's step from the previous measurement to (q, v), `interval` later, the plant
+  // having applied `tau_applied` in between
+  void observe(In q, In v, double interval, In tau_applied);
+  // the torque rule's checks and bookkeeping after a successful solve
+  bool finish_update(In q, In v);
   // the clamp [lower, upper], checked; with match_horizon, equal to the horizon's bounds where it has any
   void check_and_set_clamp(const Vec& lower, const Vec& upper, bool match_horizon);
 
@@ -147,6 +163,8 @@ class Controller {
   std::shared_ptr<const Model> plant_model_;  ///< for the ID torque and the observer
   Data data_;                 ///< for the ID torque
   Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;
+  // the last update's measurement and the â_0 its torque rule used (aim re-runs the rule)
+  Vec q_meas_, v_meas_, a0_rule_;
   // observer: time constant (0: off), previous measurement, torques over the last and the
   // current period, the estimate and a scratch acceleration
   double observer_time_constant_ = 0;
