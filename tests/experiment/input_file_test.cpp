@@ -138,3 +138,24 @@ TEST_F(InputFileTest, TrajectoriesAndRunLogsMustBeRegularFiles) {
 
 }  // namespace
 }  // namespace idmpc
+
+namespace idmpc {
+namespace {
+
+// the one grammar of decimal numbers the command line and the task's text fields share
+TEST(DecimalNumbers, RealsAndIntegersAsUsersWriteThem) {
+  for (const char* s : {"0", "2", "0.5", ".5", "5.", "1e-3", "2E+4", "10"}) {
+    EXPECT_TRUE(is_decimal_real(s, false, false)) << s;
+  }
+  for (const char* s : {"", "-1", "+1", "010", "0x1", "1e", "e3", ".", "inf", "nan", "1 ", " 1", "1,5"}) {
+    EXPECT_FALSE(is_decimal_real(s, false, false)) << "'" << s << "'";
+  }
+  for (const char* s : {"-1", "+0.5", "-inf", "inf", "-2e3"}) EXPECT_TRUE(is_decimal_real(s, true, true)) << s;
+  for (const char* s : {"-", "--1", "-010", "infinity", "nan"}) EXPECT_FALSE(is_decimal_real(s, true, true)) << s;
+  for (const char* s : {"0", "10", "-3", "+7"}) EXPECT_TRUE(is_decimal_integer(s, true)) << s;
+  for (const char* s : {"", "010", "1.0", "1e3", "0x10", "-"}) EXPECT_FALSE(is_decimal_integer(s, true)) << s;
+  EXPECT_FALSE(is_decimal_integer("-3", false));
+}
+
+}  // namespace
+}  // namespace idmpc

@@ -127,4 +127,44 @@ nlohmann::json read_json_file(const std::string& path, const std::string& noun) 
   return parse_json(read_input_file(path, noun, "a JSON file"), noun + " '" + path + "'");
 }
 
+namespace {
+
+// decimal digits from `i`; how many
+std::size_t decimal_digits(std::string_view s, std::size_t& i) {
+  const std::size_t begin = i;
+  while (i < s.size() && s[i] >= '0' && s[i] <= '9') ++i;
+  return i - begin;
+}
+
+}  // namespace
+
+bool is_decimal_real(std::string_view s, bool sign, bool infinity) {
+  std::size_t i = 0;
+  if (sign && i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+  if (infinity && s.substr(i) == "inf") return true;
+  const std::size_t first = i;
+  const std::size_t whole = decimal_digits(s, i);
+  if (whole > 1 && s[first] == '0') return false;
+  std::size_t fraction = 0;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    fraction = decimal_digits(s, i);
+  }
+  if (whole + fraction == 0) return false;
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    ++i;
+    if (i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+    if (decimal_digits(s, i) == 0) return false;
+  }
+  return i == s.size();
+}
+
+bool is_decimal_integer(std::string_view s, bool sign) {
+  std::size_t i = 0;
+  if (sign && i < s.size() && (s[i] == '-' || s[i] == '+')) ++i;
+  const std::size_t first = i;
+  const std::size_t n = decimal_digits(s, i);
+  return n > 0 && i == s.size() && !(n > 1 && s[first] == '0');
+}
+
 }  // namespace idmpc

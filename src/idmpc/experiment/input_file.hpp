@@ -28,6 +28,14 @@ inline constexpr std::size_t kMaxShownChars = 80;
 /// character boundary) followed by "…" and its length, e.g. "[[[[…" (120000 characters)".
 std::string abbreviate(std::string_view text, std::size_t max_chars = kMaxShownChars);
 
+/// @brief Whether `text` is a decimal number as users write them on the command line and in
+/// task fields: (digits [. digits] | . digits) [e [sign] digits], no leading zero before another
+/// digit (so no octal look-alike, no 0x, 0b or 0o prefix), with a leading sign if `sign`, and
+/// also [sign] inf if `infinity`.
+bool is_decimal_real(std::string_view text, bool sign, bool infinity);
+/// @brief Whether `text` is [sign if `sign`] digits, no leading zero before another digit.
+bool is_decimal_integer(std::string_view text, bool sign);
+
 /// @brief Why `path` cannot be an input file of at most `max_bytes` bytes, or "" when it can:
 /// "does not exist", "permission denied", "is a directory, expected <expected>", "is a FIFO,
 /// expected <expected>" (likewise a device or a socket), "is 70 MiB, expected at most 64 MiB".
