@@ -59,6 +59,12 @@ bool task_table(const std::string& table) { return table == kArmsTable || table 
 // the work-precision grid: mjcf/work_precision.json lists the paper's models (the swing-up on
 // each), real arms' task files and the kmax values
 constexpr const char* kWorkPrecisionTable = "work-precision";
+// whether a cell of `table` on `model` runs a task file (a real arm's) rather than the paper's
+// task on a model
+bool runs_task_file(const std::string& table, const std::string& model) {
+  return task_table(table) ||
+         (table == kWorkPrecisionTable && model.size() > 5 && model.compare(model.size() - 5, 5, ".json") == 0);
+}
 
 struct Cell {
   // arms: model is the task file as the list names it
@@ -80,11 +86,7 @@ struct Cell {
     return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting") +
            (products == "difference" ? "" : ", " + products + " products");
   }
-  // whether the cell runs a task file (a real arm's) rather than the paper's task on a model
-  bool runs_task_file() const {
-    return task_table(table) || (table == kWorkPrecisionTable && model.size() > 5 &&
-                                 model.compare(model.size() - 5, 5, ".json") == 0);
-  }
+  bool runs_task_file() const { return app::runs_task_file(table, model); }
 };
 
 // the hash of the contents of a model file, the files it includes and its asset files (not of
@@ -337,7 +339,7 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
   if (opt.tables == kWorkPrecisionTable) {
     const WorkPrecisionGrid g = work_precision_grid(opt);
     for (const std::string& model : g.runs) {
-      const bool file = Cell{kWorkPrecisionTable, model}.runs_task_file();
+      const bool file = runs_task_file(kWorkPrecisionTable, model);
       const Task t = file ? load_task(in_models(opt, model)) : base;
       for (const auto& mode : modes) {
         for (const auto& shooting : shootings) {

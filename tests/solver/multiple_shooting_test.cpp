@@ -317,7 +317,9 @@ TEST_P(MultipleShooting, BothSchemesConvergeToTheSameSolution) {
   for (int p = 0; p < products_run; ++p) {
     EXPECT_LE((solution[p][1] - solution[p][0]).norm(), kSameSolution * solution[p][0].norm());
   }
-  if (products_run == 2) EXPECT_LE((solution[1][0] - solution[0][0]).norm(), kSameSolution * solution[0][0].norm());
+  if (products_run == 2) {
+    EXPECT_LE((solution[1][0] - solution[0][0]).norm(), kSameSolution * solution[0][0].norm());
+  }
 }
 
 TEST_P(MultipleShooting, AnUpdateCostsOneEvaluationMoreThanSingleShooting) {
