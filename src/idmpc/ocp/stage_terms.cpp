@@ -224,8 +224,12 @@ void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q,
   }
 }
 
-template void StageTerms::state_gradient_of<double>(int, RefIn<double>, RefIn<double>, RefOut<double>,
-                                                    RefOut<double>) const;
-template void StageTerms::state_gradient_of<Dual>(int, RefIn<Dual>, RefIn<Dual>, RefOut<Dual>, RefOut<Dual>) const;
+void StageTerms::state_gradient(int i, In q, In v, Out L_q, Out L_v) const {
+  state_gradient_of<double>(i, q, v, L_q, L_v);
+}
+
+void StageTerms::state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const {
+  state_gradient_of<Dual>(i, q, v, L_q, L_v);
+}
 
 }  // namespace idmpc

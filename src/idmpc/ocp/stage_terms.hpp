@@ -115,10 +115,8 @@ class StageTerms {
 
   /// @brief The state part of stage i's cost gradient, ∂L/∂q and ∂L/∂v (i = N: ∂φ/∂q, ∂φ/∂v,
   /// the terminal costates): the joint terms and, with a frame target, Jᵀf (cost.hpp).
-  void state_gradient(int i, In q, In v, Out L_q, Out L_v) const { state_gradient_of<double>(i, q, v, L_q, L_v); }
-  void state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const {
-    state_gradient_of<Dual>(i, q, v, L_q, L_v);
-  }
+  void state_gradient(int i, In q, In v, Out L_q, Out L_v) const;
+  void state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const;
 
   /// @brief The value of stage i's cost without its acceleration term, the task's stage cost:
   /// ½(q − q_ref,i)ᵀQ_q(·) + ½(v − v_ref,i)ᵀQ_v(·) + ½(u − u_ref,i)ᵀR(·) + φ_frame(q) (cost.hpp).
