@@ -161,7 +161,7 @@ bool record_swingup(SolverFixture& f, const Case& c) {
         f.t.push_back(r.t);
         f.q.push_back(r.q);
         f.v.push_back(r.v);
-        f.U.push_back(controller.solver().solution());
+        f.U.push_back(controller.cgmres().solution());
       });
   // keep the successful updates only
   const size_t ok = result.update_ms.size();

@@ -116,6 +116,18 @@ void bind_control(py::module_& m) {
       .def_readwrite("Qa", &OcpWeights::Qa)
       .def_readwrite("R", &OcpWeights::R);
 
+  py::class_<RiccatiSettings>(m, "RiccatiSettings",
+                              "The Riccati solver's settings (the task file's \"riccati\" object).")
+      .def(py::init<>())
+      .def_readwrite("iterations", &RiccatiSettings::iterations, "SQP iterations per update (1: real-time iteration)")
+      .def_readwrite("tolerance", &RiccatiSettings::tolerance, "fewer iterations below this KKT residual (0: all)")
+      .def_readwrite("init_iterations", &RiccatiSettings::init_iterations, "SQP iterations of the start, at most")
+      .def_readwrite("init_tolerance", &RiccatiSettings::init_tolerance, "the start's KKT residual")
+      .def_readwrite("barrier", &RiccatiSettings::barrier, "weight of the torque limits' barrier")
+      .def_readwrite("regularization", &RiccatiSettings::regularization)
+      .def_readwrite("line_search", &RiccatiSettings::line_search, "line search in the updates too")
+      .def("validate", &RiccatiSettings::validate, "Raises ValueError naming the first bad setting.");
+
   py::class_<ControllerSettings>(m, "ControllerSettings",
                                  "Everything a Controller is built from besides its model; vectors have one entry "
                                  "per joint, checked by the Controller's constructor.")
@@ -128,7 +140,11 @@ void bind_control(py::module_& m) {
           [](ControllerSettings& s, const std::string& x) { s.derivatives = parse_derivative_mode(x); },
           "\"matrix\" or \"adjoint\"")
       .def_readwrite("N", &ControllerSettings::N, "horizon stages")
+      .def_property(
+          "solver", [](const ControllerSettings& s) { return to_string(s.solver); },
+          [](ControllerSettings& s, const std::string& x) { s.solver = parse_solver(x); }, "\"cgmres\" or \"riccati\"")
       .def_readwrite("cgmres", &ControllerSettings::cgmres)
+      .def_readwrite("riccati", &ControllerSettings::riccati)
       .def_readwrite("weights", &ControllerSettings::weights)
       .def_readwrite("q_ref", &ControllerSettings::q_ref)
       .def_property(

@@ -36,6 +36,12 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   auto add = [&](CLI::Option* opt, void (*apply)(const Task&, Task&)) { o.given.emplace_back(opt, apply); };
   add(sub.add_option("--formulation", t.formulation, "fd (torques, ABA) or id (accelerations, RNEA)"),
       [](const Task& s, Task& d) { d.formulation = s.formulation; });
+  add(sub.add_option("--solver", t.solver,
+                     "cgmres (C/GMRES, the paper's) or riccati (Gauss-Newton SQP with a Riccati recursion)"),
+      [](const Task& s, Task& d) { d.solver = s.solver; });
+  add(sub.add_option("--iterations", t.riccati.iterations,
+                     "riccati: SQP iterations per update (1: real-time iteration)"),
+      [](const Task& s, Task& d) { d.riccati.iterations = s.riccati.iterations; });
   add(sub.add_option("--derivatives", t.derivatives, "matrix (the paper's) or adjoint (O(n))"),
       [](const Task& s, Task& d) { d.derivatives = s.derivatives; });
   add(sub.add_option("--N", t.N, "horizon steps"), [](const Task& s, Task& d) { d.N = s.N; });
@@ -172,8 +178,11 @@ void write_json(const nlohmann::json& j, const std::string& path) {
 std::string human_summary(const RunSummary& s) {
   std::ostringstream o;
   o << std::setprecision(4);
+  const bool riccati = s.task.solver == "riccati";
   o << s.label().substr(0, s.label().find(')') + 1) << " on " << s.task.model << ": n = " << s.n
-    << ", N = " << s.task.N << ", kmax = " << s.task.kmax << ", " << s.task.duration << " s\n";
+    << ", N = " << s.task.N << ", "
+    << (riccati ? "iterations = " + std::to_string(s.task.riccati.iterations) : "kmax = " + std::to_string(s.task.kmax))
+    << ", " << s.task.duration << " s\n";
   if (s.diverged) {
     o << "  DIVERGED at t = " << s.diverged_at << " s: " << s.divergence_reason << "\n";
     if (!s.divergence_hint.empty()) o << "  hint: " << s.divergence_hint << "\n";
@@ -182,12 +191,17 @@ std::string human_summary(const RunSummary& s) {
   }
   o << "  update time [ms]: mean " << s.mean_update_ms << ", p50 " << s.p50_update_ms << ", p95 "
     << s.p95_update_ms << ", max " << s.max_update_ms << "  (" << s.evaluations_per_update
-    << " F evaluations)\n";
+    << (riccati ? " linearizations and line-search evaluations)\n" : " F evaluations)\n");
   if (s.task.latency != "none" || s.deadline_misses > 0) {
     o << "  compute latency " << s.task.latency << ": " << s.deadline_misses
       << " update(s) took longer than the control period of " << s.control_period_ms << " ms (deadline misses)\n";
   }
-  o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
+  if (riccati) {
+    o << "  phases [ms]: local models " << s.rollout_ms << ", Riccati recursion " << s.costate_ms << ", rest "
+      << s.gmres_ms << "\n";
+  } else {
+    o << "  phases [ms]: rollout " << s.rollout_ms << ", costate " << s.costate_ms << ", gmres " << s.gmres_ms << "\n";
+  }
   o << "  final max|q - qref| = " << s.final_q_error << ", |v| = " << s.final_v_norm
     << ", mean residual " << s.mean_residual << "\n";
   if (s.tracking) {

@@ -54,7 +54,7 @@ TEST_P(ControllerRule, TorqueIsEqs27And28) {
   VecX<double> q = VecX<double>::Zero(n), v = VecX<double>::Zero(n);
   q[0] = -M_PI + 0.1;
   const VecX<double> tau0 = controller.initialize(q, v);
-  VecX<double> a0_previous = controller.solver().solution().head(n);
+  VecX<double> a0_previous = controller.solver().first_input();
   // at t = 0 the torque applies at once: no prediction
   const VecX<double> expected0 = c.formulation == Formulation::kForwardDynamics
                                      ? a0_previous
@@ -71,7 +71,7 @@ TEST_P(ControllerRule, TorqueIsEqs27And28) {
       applied = controller.torque();
     }
     ASSERT_TRUE(controller.update(t, q, v)) << controller.failure();
-    const VecX<double> U0 = controller.solver().solution().head(n);
+    const VecX<double> U0 = controller.solver().first_input();
     VecX<double> expected;
     if (c.formulation == Formulation::kForwardDynamics) {
       expected = U0;  // FD applies u_0 and ignores â_0
@@ -264,7 +264,7 @@ DisturbanceRun run_with_disturbance(const Model& model, Formulation f, Derivativ
   DisturbanceRun r;
   VecX<double> q = kStart, v = VecX<double>::Zero(n);
   VecX<double> applied = controller.initialize(q, v);
-  VecX<double> a0_previous = controller.solver().solution().head(n);
+  VecX<double> a0_previous = controller.solver().first_input();
   for (int k = 0; k < kUpdates; ++k) {
     if (k > 0) {  // the plant under the torque of the update before, and the missing d
       v += dt * aba(model, data, q, v, VecX<double>(applied + d));
@@ -279,7 +279,7 @@ DisturbanceRun run_with_disturbance(const Model& model, Formulation f, Derivativ
     r.d_hat.push_back(controller.disturbance());
     if (f == Formulation::kInverseDynamics) {
       // eqs. 27–28 with the estimate: τ = ID(q + Δt v, v + Δt â_0, a_0) − d̂, with d̂ of this update
-      const VecX<double> U0 = controller.solver().solution().head(n);
+      const VecX<double> U0 = controller.solver().first_input();
       const VecX<double> without = rnea(model, data, VecX<double>(q + dt * v), VecX<double>(v + dt * a0_previous), U0);
       const VecX<double> expected = without - controller.disturbance();
       r.worst_rule = std::max(r.worst_rule, rel(controller.torque(), expected));

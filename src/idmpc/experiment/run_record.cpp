@@ -262,6 +262,10 @@ std::string RunSummary::label() const {
   std::string upper = task.formulation;
   std::transform(upper.begin(), upper.end(), upper.begin(),
                  [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  if (task.solver == "riccati") {
+    // the stage Jacobians are matrices whatever the derivative mode says
+    return "Riccati (" + upper + ") N=" + std::to_string(task.N) + " iterations=" + std::to_string(task.riccati.iterations);
+  }
   return "C/GMRES (" + upper + ", " + task.derivatives + (task.shooting == "multiple" ? ", multiple shooting" : "") +
          (task.products == "exact" ? ", exact products" : "") + ") N=" + std::to_string(task.N) + " kmax=" + std::to_string(task.kmax);
 }

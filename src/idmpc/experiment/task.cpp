@@ -149,7 +149,7 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
   r.known({"schema", "description", "model", "q0", "qref", "duration", "formulation", "derivatives",
            "simd_stages", "direct_torque", "actuate_every_joint", "implicit_damping", "friction_velocity",
            "offset_free", "observer_time_constant", "reach_tolerance", "torque_limit", "weights", "cgmres",
-           "target", "reference", "tracking_tolerance", "latency"});
+           "target", "reference", "tracking_tolerance", "latency", "solver", "riccati"});
   if (r.has("schema") && j.at("schema") != kTaskSchema) r.bad("schema", (std::string("\"") + kTaskSchema + "\"").c_str());
   r.get("description", t.description);
   r.get("model", t.model);
@@ -263,6 +263,17 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
     c.get("shooting", t.shooting);
     c.get("products", t.products);
   }
+  r.get("solver", t.solver);
+  if (r.has("riccati")) {
+    const Reader c = r.sub("riccati");
+    c.known({"iterations", "tolerance", "init_iterations", "init_tolerance", "barrier", "line_search"});
+    c.get("iterations", t.riccati.iterations);
+    c.get("tolerance", t.riccati.tolerance);
+    c.get("init_iterations", t.riccati.init_iterations);
+    c.get("init_tolerance", t.riccati.init_tolerance);
+    c.get("barrier", t.riccati.barrier);
+    c.get("line_search", t.riccati.line_search);
+  }
   return t;
 }
 
@@ -345,6 +356,14 @@ nlohmann::json to_json(const Task& t) {
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
                  {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon},
                  {"shooting", t.shooting}, {"products", t.products}};
+  // written only for the Riccati solver: a C/GMRES task reads and hashes as it always has
+  if (t.solver != "cgmres") {
+    j["solver"] = t.solver;
+    const RiccatiSettings& rs = t.riccati;
+    j["riccati"] = {{"iterations", rs.iterations},         {"tolerance", rs.tolerance},
+                    {"init_iterations", rs.init_iterations}, {"init_tolerance", rs.init_tolerance},
+                    {"barrier", rs.barrier},               {"line_search", rs.line_search}};
+  }
   return j;
 }
 
@@ -354,11 +373,13 @@ ResolvedTask resolve(const Task& t, int n) {
                                                               {t.derivatives, "--derivatives (derivatives)"},
                                                               {t.shooting, "--shooting (cgmres.shooting)"},
                                                               {t.products, "--products (cgmres.products)"},
+                                                              {t.solver, "--solver (solver)"},
                                                               {t.implicit_damping, "--implicit-damping (implicit_damping)"}};
   for (const auto& [word, name] : words) {
     if (word.size() > kMaxShownChars) throw std::invalid_argument(std::string(name) + ": unknown value '" + abbreviate(word) + "'");
   }
-  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}, {}};
+  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}, {},
+                 {}, {}};
   // bounded before anything is sized from it
   if (t.N < 1 || t.N > kMaxHorizonSteps) {
     throw std::invalid_argument("--N (cgmres.N) must be from 1 to " + std::to_string(kMaxHorizonSteps) +
@@ -449,6 +470,13 @@ ResolvedTask resolve(const Task& t, int n) {
     throw std::invalid_argument(std::string("--products (cgmres.products): ") + e.what());
   }
   r.cgmres.validate();
+  try {
+    r.solver = parse_solver(t.solver);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("--solver (solver): ") + e.what());
+  }
+  r.riccati = t.riccati;
+  r.riccati.validate();  // its message names the setting
   if (t.implicit_damping != "on" && t.implicit_damping != "off" && t.implicit_damping != "auto") {
     throw std::invalid_argument("--implicit-damping (implicit_damping): expected on, off or auto, got '" +
                                 t.implicit_damping + "'");

@@ -48,6 +48,11 @@
 ///                  default), "measured" (each update's wall time) or a compute time in ms (a
 ///                  number): the torque of an update reaches the plant ⌈t_compute/δt⌉ plant steps
 ///                  after its measurement (mj::ClosedLoopSettings::latency)
+///   "solver"       "cgmres" (the default) or "riccati" (Gauss–Newton SQP with a Riccati
+///                  recursion: solver/riccati.hpp); the horizon (N, Tf) and dt are the "cgmres"
+///                  object's for both
+///   "riccati"      {"iterations" per update (1: real-time iteration), "tolerance",
+///                  "init_iterations", "init_tolerance", "barrier", "line_search"}
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
 ///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
@@ -62,6 +67,7 @@
 #include "idmpc/experiment/latency.hpp"
 #include "idmpc/ocp/problem.hpp"
 #include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/riccati.hpp"
 
 namespace idmpc {
 
@@ -106,6 +112,8 @@ struct Task {
   std::string shooting;  ///< "single" or "multiple"
   std::string products;  ///< "difference" or "exact" (DESIGN §11)
   std::string latency = "none";  ///< "none", "measured" or a compute time in ms (parse_latency)
+  std::string solver = "cgmres";  ///< "cgmres" or "riccati"
+  RiccatiSettings riccati;        ///< the Riccati solver's settings
 };
 
 /// @brief The paper's swing-up task file, mjcf/paper_swingup.json of the data directory
@@ -144,6 +152,8 @@ struct ResolvedTask {
   CgmresSettings cgmres;
   Latency latency;                 ///< compute latency in the closed loop (none by default)
   std::vector<std::string> warnings;  ///< settings accepted but without effect (e.g. Q_a in FD)
+  SolverKind solver = SolverKind::kCgmres;
+  RiccatiSettings riccati;
 };
 /// @brief Throws std::invalid_argument naming the field (a scalar or n values expected,
 /// non-negative weights, finite values, valid C/GMRES settings, N within kMaxHorizonSteps).

@@ -68,6 +68,8 @@ TaskRun::TaskRun(const Task& task)
   cs.derivatives = resolved_.derivatives;
   cs.N = task.N;
   cs.cgmres = resolved_.cgmres;
+  cs.solver = resolved_.solver;
+  cs.riccati = resolved_.riccati;
   cs.weights = setup_->weights;
   cs.q_ref = resolved_.qref;
   cs.frame_target = frame_target_;
@@ -158,9 +160,10 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   RunSummary s;
   s.task = task_;
   s.n = n;
-  s.simd_stages = c.nlp().stage_batching() ||
-                  (c.problem().costate_lanes() && resolved_.cgmres.shooting == ShootingScheme::kMultiple);
-  s.zeta = c.solver().settings().zeta;
+  const bool cgmres = c.solver_kind() == SolverKind::kCgmres;
+  s.simd_stages = cgmres && (c.nlp().stage_batching() ||
+                             (c.problem().costate_lanes() && resolved_.cgmres.shooting == ShootingScheme::kMultiple));
+  s.zeta = cgmres ? c.cgmres().settings().zeta : 0.0;
   s.steps = result.steps;
   s.diverged = result.diverged;
   s.diverged_at = result.diverged_at;

@@ -62,6 +62,11 @@ void OcpProblem::set_stages_in_lanes(bool on) {
   if (dual_) stages_->reserve_dual(terms_.model());
 }
 
+std::unique_ptr<LocalModel> OcpProblem::make_local_model() const {
+  if (formulation_ == Formulation::kForwardDynamics) return std::make_unique<FdLocalModel>(terms_);
+  return std::make_unique<IdLocalModel>(terms_);
+}
+
 std::unique_ptr<StageModel> OcpProblem::make_stages() const {
   using D = DerivativeMode;
   const Model& model = terms_.model();

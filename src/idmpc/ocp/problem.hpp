@@ -18,6 +18,7 @@
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/ocp/cost.hpp"
+#include "idmpc/ocp/local_model.hpp"
 #include "idmpc/ocp/stage_model.hpp"
 #include "idmpc/ocp/stage_terms.hpp"
 #include "idmpc/ocp/torque_limits.hpp"
@@ -184,6 +185,10 @@ class OcpProblem {
     stages_->reserve_dual(terms_.model());
   }
   bool dual_reserved() const { return dual_; }
+
+  /// @brief A workspace of this formulation's stage local model (local_model.hpp): what a
+  /// Riccati-type solver reads. The formulation picks the type here and nowhere else.
+  std::unique_ptr<LocalModel> make_local_model() const;
 
   /// @brief Bytes of heap the stages' workspaces own (per-stage workspaces, lanes and the
   /// products kept from them).

@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+
 #include "idmpc/dynamics/rnea.hpp"
 
 namespace idmpc {
@@ -230,6 +232,46 @@ void StageTerms::state_gradient(int i, In q, In v, Out L_q, Out L_v) const {
 
 void StageTerms::state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const {
   state_gradient_of<Dual>(i, q, v, L_q, L_v);
+}
+
+}  // namespace idmpc
+
+namespace idmpc {
+
+StageTerms::FrameWorkspace StageTerms::make_frame_workspace() const {
+  FrameWorkspace ws;
+  if (frame_) {
+    ws.kinematics.emplace(*model_, frame_->frame);
+    ws.jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
+  }
+  return ws;
+}
+
+void StageTerms::state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv, FrameWorkspace& ws) const {
+  (void)i;  // the weights and the target's orientation are the same at every stage
+  const OcpWeights& w = cost_.weights();
+  H_qq.setZero();
+  H_qq.diagonal() = w.Qq;
+  H_vv = w.Qv;
+  if (!frame_) return;
+  if (!ws.kinematics) throw std::logic_error("state_hessian: the workspace was made without the frame target");
+  FrameKinematics<double>& fk = *ws.kinematics;
+  fk.compute(*model_, q);
+  fk.jacobian(ws.jacobian);
+  const auto Jp = ws.jacobian.topRows<3>();
+  const auto Jw = ws.jacobian.bottomRows<3>();
+  H_qq.noalias() += Jp.transpose() * frame_->position_weight.asDiagonal() * Jp;
+  if (frame_->orientation_weight > 0) {
+    // w_o(1 − cos θ) = w_o(1 − (tr E − 1)/2) with E = R R_refᵀ; turning the frame by exp([δ]×)
+    // gives tr(exp([δ]×)E), whose second-order term is ½δᵀ(E_sym − tr(E) I)δ
+    const Mat3<double> E = fk.rotation() * frame_->rotation.transpose();
+    const Mat3<double> H =
+        (0.5 * frame_->orientation_weight) * (E.trace() * Mat3<double>::Identity() - 0.5 * (E + E.transpose()));
+    Eigen::SelfAdjointEigenSolver<Mat3<double>> eig(H);
+    const Mat3<double> H_psd =
+        eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+    H_qq.noalias() += Jw.transpose() * H_psd * Jw;
+  }
 }
 
 }  // namespace idmpc

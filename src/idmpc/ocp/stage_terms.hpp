@@ -118,6 +118,22 @@ class StageTerms {
   void state_gradient(int i, In q, In v, Out L_q, Out L_v) const;
   void state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const;
 
+  /// @brief Caller-owned scratch of state_hessian (thread-safe: nothing of the StageTerms is
+  /// written); make_frame_workspace sizes it for this problem's frame target, if any.
+  struct FrameWorkspace {
+    std::optional<FrameKinematics<double>> kinematics;
+    Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian;
+  };
+  FrameWorkspace make_frame_workspace() const;
+
+  /// @brief The Gauss–Newton Hessian of stage i's state cost (i = N: the terminal cost):
+  /// H_qq = diag(Q_q) + J_pᵀdiag(w_p)J_p + J_ωᵀ H_θ J_ω and H_vv = Q_v (diagonal), with
+  /// H_θ = ½w_o(tr(E)·I − sym E), E = R R_refᵀ, the exact Hessian of w_o(1 − cos θ) in the
+  /// rotation's own increment, its negative eigenvalues (far from the target) set to zero. At a
+  /// point where every residual vanishes it is the exact Hessian of the cost. Overwrites H_qq
+  /// (n × n) and H_vv (n); `ws` from make_frame_workspace.
+  void state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv, FrameWorkspace& ws) const;
+
   /// @brief The value of stage i's cost without its acceleration term, the task's stage cost:
   /// ½(q − q_ref,i)ᵀQ_q(·) + ½(v − v_ref,i)ᵀQ_v(·) + ½(u − u_ref,i)ᵀR(·) + φ_frame(q) (cost.hpp).
   /// What a closed loop accumulates along its measured trajectory; allocation-free.

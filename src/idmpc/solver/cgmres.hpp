@@ -22,6 +22,7 @@
 
 #include "idmpc/solver/gmres.hpp"
 #include "idmpc/solver/horizon.hpp"
+#include "idmpc/solver/mpc_solver.hpp"
 #include "idmpc/solver/shooting.hpp"
 
 namespace idmpc {
@@ -59,14 +60,6 @@ struct CgmresSettings {
 
   /// @brief Throws std::invalid_argument naming the first bad setting.
   void validate() const;
-};
-
-/// @brief Wall-clock split of one update [s].
-struct UpdateTimes {
-  double total = 0;
-  double rollout = 0;  ///< forward sweeps of the F evaluations (dynamics)
-  double costate = 0;  ///< backward sweeps (derivatives/adjoints, costates)
-  double gmres = 0;    ///< everything else: Arnoldi, rotations, vector updates
 };
 
 class Cgmres {

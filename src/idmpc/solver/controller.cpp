@@ -47,11 +47,21 @@ OcpProblem make_problem(const std::shared_ptr<const Model>& model, const Control
   return problem;
 }
 
+// the solver of `settings` over `problem`
+std::unique_ptr<MpcSolver> make_solver(OcpProblem problem, const ControllerSettings& s) {
+  if (s.solver == SolverKind::kRiccati) {
+    s.cgmres.validate();
+    return std::make_unique<RiccatiSolver>(std::move(problem), s.cgmres.Tf, s.cgmres.dt, s.riccati);
+  }
+  auto solver = std::make_unique<CgmresMpc>(std::move(problem), s.cgmres);
+  solver->shooting().set_stage_batching(s.simd_stages);
+  return solver;
+}
+
 }  // namespace
 
 Controller::Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings)
-    : Controller(make_problem(model, settings), settings.cgmres, model) {
-  nlp_.set_stage_batching(settings.simd_stages);
+    : Controller(make_solver(make_problem(model, settings), settings), model) {
   const int n = this->n();
   if (settings.torque_lower.size() == n) {
     if (settings.limits_in_horizon) {
@@ -65,15 +75,17 @@ Controller::Controller(std::shared_ptr<const Model> model, const ControllerSetti
 }
 
 Controller::Controller(OcpProblem problem, const CgmresSettings& settings, std::shared_ptr<const Model> plant_model)
-    : nlp_(std::move(problem)),
-      solver_(nlp_, settings),
-      plant_model_(plant_model ? std::move(plant_model) : nlp_.problem().model_ptr()),
+    : Controller(std::make_unique<CgmresMpc>(std::move(problem), settings), std::move(plant_model)) {}
+
+Controller::Controller(std::unique_ptr<MpcSolver> solver, std::shared_ptr<const Model> plant_model)
+    : solver_(solver ? std::move(solver) : throw std::invalid_argument("controller: no solver given")),
+      plant_model_(plant_model ? std::move(plant_model) : solver_->problem().model_ptr()),
       data_(*plant_model_) {
-  if (plant_model_->n != nlp_.n()) {
+  if (plant_model_->n != n()) {
     throw std::invalid_argument("the plant model has " + std::to_string(plant_model_->n) + " joints, the problem " +
-                                std::to_string(nlp_.n()));
+                                std::to_string(n()));
   }
-  const int n = nlp_.n();
+  const int n = this->n();
   for (Vec* x : {&tau_, &tau_cmd_, &a0_hat_, &q_pred_, &v_pred_, &q_meas_, &v_meas_, &a0_rule_, &q_prev_, &v_prev_,
                  &tau_last_, &tau_pending_, &d_hat_, &a_meas_}) {
     *x = Vec::Zero(n);
@@ -81,13 +93,27 @@ Controller::Controller(OcpProblem problem, const CgmresSettings& settings, std::
   // the clamp: the horizon's bounds where it has them
   lower_ = Vec::Constant(n, -std::numeric_limits<double>::infinity());
   upper_ = Vec::Constant(n, std::numeric_limits<double>::infinity());
-  const TorqueBounds& b = nlp_.problem().torque_bounds();
+  const TorqueBounds& b = problem().torque_bounds();
   for (int k = 0; k < b.m(); ++k) {
     const int j = b.joints()[static_cast<size_t>(k)];
     lower_[j] = b.middle()[k] - b.half_range()[k];
     upper_[j] = b.middle()[k] + b.half_range()[k];
   }
 }
+
+namespace {
+CgmresMpc* as_cgmres(MpcSolver& s) {
+  if (s.kind() != SolverKind::kCgmres) {
+    throw std::logic_error("controller: the solver is '" + to_string(s.kind()) + "', not C/GMRES");
+  }
+  return static_cast<CgmresMpc*>(&s);
+}
+}  // namespace
+
+Shooting& Controller::nlp() { return as_cgmres(*solver_)->shooting(); }
+const Shooting& Controller::nlp() const { return as_cgmres(*solver_)->shooting(); }
+Cgmres& Controller::cgmres() { return as_cgmres(*solver_)->cgmres(); }
+const Cgmres& Controller::cgmres() const { return as_cgmres(*solver_)->cgmres(); }
 
 void Controller::set_torque_limits(const Vec& lower, const Vec& upper) { check_and_set_clamp(lower, upper, true); }
 
@@ -110,7 +136,7 @@ void Controller::check_and_set_clamp(const Vec& lower, const Vec& upper, bool ma
   }
   if (match_horizon) {
     // one set of limits: where the horizon bounds a joint, the clamp is the same range
-    const TorqueBounds& b = nlp_.problem().torque_bounds();
+    const TorqueBounds& b = problem().torque_bounds();
     for (int k = 0; k < b.m(); ++k) {
       const int j = b.joints()[static_cast<size_t>(k)];
       const double lo = b.middle()[k] - b.half_range()[k], hi = b.middle()[k] + b.half_range()[k];
@@ -126,7 +152,7 @@ void Controller::check_and_set_clamp(const Vec& lower, const Vec& upper, bool ma
   upper_ = upper;
 }
 
-void Controller::set_target(const Vec& q_ref) { nlp_.problem().set_target(q_ref); }
+void Controller::set_target(const Vec& q_ref) { problem().set_target(q_ref); }
 
 void Controller::set_disturbance_observer(double time_constant) {
   if (!(time_constant >= 0) || !std::isfinite(time_constant)) {
@@ -150,7 +176,7 @@ void Controller::observe(In q, In v, double interval, In tau_applied) {
       const double bound = std::max(std::abs(lower_[j]), std::abs(upper_[j]));
       d_hat_[j] = std::clamp(d_hat_[j] + beta * (raw - d_hat_[j]), -bound, bound);
     }
-    if (d_hat_.allFinite()) nlp_.problem().set_disturbance(d_hat_);
+    if (d_hat_.allFinite()) problem().set_disturbance(d_hat_);
   }
   q_prev_ = q;
   v_prev_ = v;
@@ -162,9 +188,9 @@ const VecX<double>& Controller::initialize(In q, In v) {
   failure_.clear();
   have_previous_ = false;
   d_hat_.setZero();
-  nlp_.problem().set_disturbance(d_hat_);
+  problem().set_disturbance(d_hat_);
   try {
-    solver_.initialize(0.0, q, v);
+    solver_->initialize(0.0, q, v);
   } catch (const std::runtime_error& e) {
     // a non-finite start is a divergence at t = 0, reported like any other
     failure_ = e.what();
@@ -173,9 +199,9 @@ const VecX<double>& Controller::initialize(In q, In v) {
     return tau_;
   }
   // the state is measured now and the torque applies now: no prediction (Δt = 0)
-  const auto a0 = solver_.solution().head(n());
+  const auto a0 = solver_->first_input();
   torque_rule(q, v, a0, 0.0);
-  if (nlp_.formulation() == Formulation::kInverseDynamics) a0_hat_ = a0;
+  if (problem().formulation() == Formulation::kInverseDynamics) a0_hat_ = a0;
   if (!tau_cmd_.allFinite()) {
     failure_ = "initialization: non-finite torque";
     tau_.setZero();
@@ -188,8 +214,8 @@ bool Controller::update(double t, In q, In v) {
   IDMPC_CHECK_ARGUMENT(q.size() == n() && v.size() == n(), "Controller::update: q and v must have size n");
   failure_.clear();
   observe(q, v, dt(), tau_last_);
-  if (!solver_.update(t, q, v)) {
-    failure_ = solver_.failure();
+  if (!solver_->update(t, q, v)) {
+    failure_ = solver_->failure();
     return false;
   }
   return finish_update(q, v);
@@ -201,8 +227,8 @@ bool Controller::update(double t, In q, In v, double interval, In tau_applied) {
   IDMPC_CHECK_ARGUMENT(interval > 0 && std::isfinite(interval), "Controller::update: interval must be positive");
   failure_.clear();
   observe(q, v, interval, tau_applied);
-  if (!solver_.update(t, q, v)) {
-    failure_ = solver_.failure();
+  if (!solver_->update(t, q, v)) {
+    failure_ = solver_->failure();
     return false;
   }
   return finish_update(q, v);
@@ -218,7 +244,7 @@ bool Controller::finish_update(In q, In v) {
   v_meas_ = v;
   a0_rule_ = a0_hat_;
   // the new solution is the one executed from now on
-  if (nlp_.formulation() == Formulation::kInverseDynamics) a0_hat_ = solver_.solution().head(n());
+  if (problem().formulation() == Formulation::kInverseDynamics) a0_hat_ = solver_->first_input();
   // the torque of the current period [t, t + Δt) is the one this update's successor observes
   tau_last_ = tau_pending_;
   tau_pending_ = tau_;
@@ -238,14 +264,14 @@ bool Controller::aim(double delay) {
 }
 
 void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
-  const auto U0 = solver_.solution().head(n());
-  if (nlp_.formulation() == Formulation::kForwardDynamics) {
+  const auto U0 = solver_->first_input();
+  if (problem().formulation() == Formulation::kForwardDynamics) {
     tau_cmd_ = U0;
   } else {
     // delay-compensated inverse dynamics (paper eqs. 27–28)
     q_pred_ = q + dt * v;
     v_pred_ = v + dt * a0_hat;
-    tau_cmd_ = rnea(*plant_model_, data_, q_pred_, v_pred_, U0) - nlp_.problem().disturbance();
+    tau_cmd_ = rnea(*plant_model_, data_, q_pred_, v_pred_, U0) - problem().disturbance();
   }
   // the plant never receives a torque its actuator cannot give (a non-finite command is a
   // divergence, reported by update)

@@ -22,6 +22,8 @@
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/cgmres_mpc.hpp"
+#include "idmpc/solver/riccati.hpp"
 #include "idmpc/solver/shooting.hpp"
 
 namespace idmpc {
@@ -32,7 +34,12 @@ struct ControllerSettings {
   Formulation formulation = Formulation::kInverseDynamics;
   DerivativeMode derivatives = DerivativeMode::kAdjoint;
   int N = 25;                 ///< horizon stages
-  CgmresSettings cgmres;      ///< Δt, T_f, α, kmax, ζ, h, shooting scheme, start
+  /// @brief The solver family (mpc_solver.hpp): C/GMRES or the Riccati recursion.
+  SolverKind solver = SolverKind::kCgmres;
+  /// @brief The sampling period Δt and the horizon T_f (both solvers); α, kmax, ζ, h, shooting
+  /// scheme, products and start (C/GMRES).
+  CgmresSettings cgmres;
+  RiccatiSettings riccati;    ///< iterations per update, tolerances, barrier (Riccati)
   OcpWeights weights;         ///< Q_q, Q_v, Q_a, R (Q_a may be empty: zero)
   VecX<double> q_ref;         ///< the joint target; Controller::set_target changes it between updates
   /// @brief A moving joint target q_ref(t) (its rate the velocity reference); null: q_ref.
@@ -65,22 +72,35 @@ class Controller {
   /// std::invalid_argument naming the first bad setting.
   Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings);
 
-  /// @brief From a problem built by hand: owns it and the solver; the returned torques are
-  /// clamped to the problem's torque bounds (set_torque_limits to clamp otherwise). `plant_model`
-  /// is the model of the ID torque rule and the observer; null: the problem's model.
+  /// @brief From a problem built by hand: owns it and the solver (C/GMRES with `settings`); the
+  /// returned torques are clamped to the problem's torque bounds (set_torque_limits to clamp
+  /// otherwise). `plant_model` is the model of the ID torque rule and the observer; null: the
+  /// problem's model.
   Controller(OcpProblem problem, const CgmresSettings& settings,
              std::shared_ptr<const Model> plant_model = nullptr);
+  /// @brief From a solver built by hand (CgmresMpc, RiccatiSolver, or one of your own), as above.
+  explicit Controller(std::unique_ptr<MpcSolver> solver, std::shared_ptr<const Model> plant_model = nullptr);
   Controller(const Controller&) = delete;
   Controller& operator=(const Controller&) = delete;
+  /// @brief A controller moves with what it owns (solver, problem, workspaces); the models stay shared.
+  Controller(Controller&&) noexcept = default;
+  Controller& operator=(Controller&&) noexcept = default;
+  ~Controller() = default;
 
-  int n() const { return nlp_.n(); }
-  double dt() const { return solver_.settings().dt; }
-  const OcpProblem& problem() const { return nlp_.problem(); }
-  const VecX<double>& q_ref() const { return nlp_.problem().cost().q_ref(); }
-  Shooting& nlp() { return nlp_; }
-  const Shooting& nlp() const { return nlp_; }
-  const Cgmres& solver() const { return solver_; }
-  Cgmres& solver() { return solver_; }
+  int n() const { return solver_->problem().n(); }
+  double dt() const { return solver_->dt(); }
+  const OcpProblem& problem() const { return solver_->problem(); }
+  OcpProblem& problem() { return solver_->problem(); }
+  const VecX<double>& q_ref() const { return problem().cost().q_ref(); }
+  /// @brief The solver, whatever its family.
+  MpcSolver& solver() { return *solver_; }
+  const MpcSolver& solver() const { return *solver_; }
+  SolverKind solver_kind() const { return solver_->kind(); }
+  /// @brief C/GMRES's shooting residual and solver; std::logic_error under another solver.
+  Shooting& nlp();
+  const Shooting& nlp() const;
+  Cgmres& cgmres();
+  const Cgmres& cgmres() const;
 
   /// @brief Zero-horizon initialization from the measured x(0) = (q, v). Returns τ(0), the
   /// torque to apply over the first sampling period. If the initialization's residual or
@@ -115,7 +135,7 @@ class Controller {
   /// @brief A new pose for the frame target from the next update on (ControllerSettings::
   /// frame_target needed; a frame reference, if any, keeps moving the position). Allocation-free.
   void set_frame_target(const Vec3<double>& position, const Mat3<double>& rotation) {
-    nlp_.problem().set_frame_pose(position, rotation);
+    problem().set_frame_pose(position, rotation);
   }
   const Vec& torque_lower() const { return lower_; }
   const Vec& torque_upper() const { return upper_; }
@@ -126,7 +146,7 @@ class Controller {
   void set_disturbance_observer(double time_constant);
   double disturbance_observer() const { return observer_time_constant_; }
   /// @brief The current estimate d̂ (zero with the observer off).
-  const Vec& disturbance() const { return nlp_.problem().disturbance(); }
+  const Vec& disturbance() const { return problem().disturbance(); }
 
   /// @brief The torque of the last initialize/update, within the limits: what the plant gets.
   const Vec& torque() const { return tau_; }
@@ -138,13 +158,13 @@ class Controller {
   /// zero in FD, whose rule does not use it).
   const Vec& applied_acceleration() const { return a0_hat_; }
   const std::string& failure() const { return failure_; }
-  double residual_norm() const { return solver_.residual_norm(); }
+  double residual_norm() const { return solver_->residual_norm(); }
   /// @brief The task's stage cost (StageTerms::stage_cost) of a measured state and the torque
   /// applied from it, at the references of the last update's time: what a closed loop
   /// integrates to compare controllers by their outcome.
-  double stage_cost(In q, In v, In u) const { return nlp_.problem().stage_cost(0, q, v, u); }
-  /// @brief Cgmres::constraint_violation of the last update [N m].
-  double constraint_violation() const { return solver_.constraint_violation(); }
+  double stage_cost(In q, In v, In u) const { return problem().stage_cost(0, q, v, u); }
+  /// @brief MpcSolver::constraint_violation of the last update [N m].
+  double constraint_violation() const { return solver_->constraint_violation(); }
 
  private:
   // eqs. 27–28: τ from the current solution, measured (q, v) and â_0 (all given), then
@@ -158,8 +178,7 @@ class Controller {
   // the clamp [lower, upper], checked; with match_horizon, equal to the horizon's bounds where it has any
   void check_and_set_clamp(const Vec& lower, const Vec& upper, bool match_horizon);
 
-  Shooting nlp_;
-  Cgmres solver_;
+  std::unique_ptr<MpcSolver> solver_;
   std::shared_ptr<const Model> plant_model_;  ///< for the ID torque and the observer
   Data data_;                 ///< for the ID torque
   Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;

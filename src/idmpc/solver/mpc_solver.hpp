@@ -1,0 +1,67 @@
+#pragma once
+/// @file mpc_solver.hpp
+/// @brief What the Controller drives, whatever the solver family: C/GMRES (cgmres.hpp: the
+/// continuation of the optimality residual, one linear solve per update) or the Riccati
+/// recursion (riccati.hpp: Gauss–Newton SQP on the stage local models). Each owns its problem;
+/// the Controller applies the torque rule to the first stage's input and never asks which
+/// solver it has.
+
+#include <memory>
+#include <string>
+
+#include "idmpc/ocp/problem.hpp"
+
+namespace idmpc {
+
+/// @brief The solver family: C/GMRES, or Gauss–Newton SQP with a Riccati recursion.
+enum class SolverKind { kCgmres, kRiccati };
+/// @brief "cgmres"/"riccati"; parse throws std::invalid_argument naming the value.
+std::string to_string(SolverKind s);
+SolverKind parse_solver(const std::string& s);
+
+/// @brief Wall-clock split of one update [s]. C/GMRES: the residual's forward sweeps, its
+/// backward sweeps, the rest (GMRES). Riccati: the stage local models (dynamics, derivatives,
+/// costs), the Riccati recursion and the step along it, the rest (line search, bookkeeping).
+struct UpdateTimes {
+  double total = 0;
+  double rollout = 0;
+  double costate = 0;
+  double gmres = 0;
+};
+
+class MpcSolver {
+ public:
+  using Vec = VecX<double>;
+  using In = Eigen::Ref<const Vec>;
+
+  virtual ~MpcSolver() = default;
+  virtual SolverKind kind() const = 0;
+  virtual OcpProblem& problem() = 0;
+  virtual const OcpProblem& problem() const = 0;
+  /// @brief The sampling period Δt the solver assumes between updates.
+  virtual double dt() const = 0;
+
+  /// @brief The start at time t from the measured (q, v); returns the optimality error reached.
+  /// Throws std::runtime_error when the start is non-finite.
+  virtual double initialize(double t, In q, In v) = 0;
+  /// @brief One control update at time t from the measured (q, v); false on divergence, with
+  /// failure() saying why.
+  virtual bool update(double t, In q, In v) = 0;
+  /// @brief The first stage's input of the current solution: the torque u_0 (FD) or the
+  /// acceleration a_0 (ID).
+  virtual const Vec& first_input() const = 0;
+
+  virtual const std::string& failure() const = 0;
+  /// @brief The optimality error of the solution at the start of the last update (each family's
+  /// own measure of it: docs/solvers.md).
+  virtual double residual_norm() const = 0;
+  /// @brief How far the stage torques of the last update's solution leave their bounds [N m].
+  virtual double constraint_violation() const = 0;
+  /// @brief Evaluations of the horizon in the last update (C/GMRES: of F; Riccati: of the stage
+  /// local models and of the line search's values).
+  virtual int evaluations() const = 0;
+  virtual const UpdateTimes& last_times() const = 0;
+  virtual void enable_timing(bool on) = 0;
+};
+
+}  // namespace idmpc

@@ -1,0 +1,454 @@
+#include "idmpc/solver/riccati.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/dynamics/rnea.hpp"
+
+namespace idmpc {
+namespace {
+
+// the trajectory or the KKT residual beyond this: divergence (as C/GMRES's)
+constexpr double kBlowUp = 1e8;
+// s, z keep this fraction of their distance to zero in a step
+constexpr double kFractionToBoundary = 0.995;
+// a slack starts at least this fraction of the half range away from zero
+constexpr double kMinimumSlack = 1e-2;
+// the line search halves the step at most this often, then takes it and raises ε
+constexpr int kLineSearchHalvings = 12;
+// tries of the backward recursion, ε tenfold each
+constexpr int kRegularizationTries = 24;
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::string text(double x) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.3g", x);
+  return buffer;
+}
+
+}  // namespace
+
+std::string to_string(SolverKind s) { return s == SolverKind::kCgmres ? "cgmres" : "riccati"; }
+
+SolverKind parse_solver(const std::string& s) {
+  if (s == "cgmres") return SolverKind::kCgmres;
+  if (s == "riccati") return SolverKind::kRiccati;
+  throw std::invalid_argument("unknown solver '" + s + "': expected 'cgmres' or 'riccati'");
+}
+
+void RiccatiSettings::validate() const {
+  auto bad = [](const std::string& what) { throw std::invalid_argument("riccati settings: " + what); };
+  if (iterations < 1 || iterations > 1000) bad("iterations must be in 1 … 1000, got " + std::to_string(iterations));
+  if (init_iterations < 0 || init_iterations > 100000) {
+    bad("init_iterations must be in 0 … 100000, got " + std::to_string(init_iterations));
+  }
+  if (!(tolerance >= 0) || !std::isfinite(tolerance)) bad("tolerance must be >= 0 and finite, got " + text(tolerance));
+  if (!(init_tolerance >= 0) || !std::isfinite(init_tolerance)) {
+    bad("init_tolerance must be >= 0 and finite, got " + text(init_tolerance));
+  }
+  if (!(barrier > 0) || !std::isfinite(barrier)) bad("barrier must be positive and finite, got " + text(barrier));
+  if (!(regularization > 0) || !(regularization < 1)) {
+    bad("regularization must be in (0, 1), got " + text(regularization));
+  }
+}
+
+RiccatiSolver::RiccatiSolver(OcpProblem problem, double Tf, double dt, const RiccatiSettings& settings)
+    : problem_(std::move(problem)), settings_(settings), Tf_(Tf), dt_(dt), hold_(problem_.model(), DataParts::rnea()) {
+  settings_.validate();
+  if (!(Tf > 0) || !std::isfinite(Tf)) throw std::invalid_argument("horizon length Tf must be positive, got " + text(Tf));
+  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("sampling period dt must be positive, got " + text(dt));
+  const int n = this->n(), N = this->N(), nx = 2 * n;
+  model_ = problem_.make_local_model();
+  stage_.assign(static_cast<size_t>(N), StageLocal(n));
+  terminal_ = TerminalLocal(n);
+  const TorqueBounds& b = problem_.torque_bounds();
+  const int m = b.m();
+  joint_ = b.joints();
+  lower_ = b.middle() - b.half_range();
+  upper_ = b.middle() + b.half_range();
+  mu_ = Vec::Zero(m);
+  const VecX<double>& R = problem_.weights().R;
+  for (int k = 0; k < m; ++k) {
+    const double half = b.half_range()[k];
+    mu_[k] = settings_.barrier * dtau() * R[joint_[static_cast<size_t>(k)]] * half * half;
+  }
+  for (MatX<double>* x : {&X_, &dX_, &Xt_}) *x = MatX<double>::Zero(nx, N + 1);
+  for (MatX<double>* x : {&U_, &T_, &dU_, &Ut_, &k_}) *x = MatX<double>::Zero(n, N);
+  for (MatX<double>* x : {&S_, &Z_, &dS_, &dZ_, &St_}) *x = MatX<double>::Zero(2 * m, N);
+  p_ = MatX<double>::Zero(nx, N + 1);
+  defect_ = MatX<double>::Zero(nx, N);
+  P_.assign(static_cast<size_t>(N + 1), MatX<double>::Zero(nx, nx));
+  K_.assign(static_cast<size_t>(N), MatX<double>::Zero(n, nx));
+  llt_.assign(static_cast<size_t>(N), Eigen::LLT<MatX<double>>(n));
+  PA_ = MatX<double>::Zero(nx, nx);
+  PB_ = MatX<double>::Zero(nx, n);
+  Qxx_ = MatX<double>::Zero(nx, nx);
+  Quu_ = MatX<double>::Zero(n, n);
+  Qux_ = MatX<double>::Zero(n, nx);
+  for (Vec* x : {&pb_, &qx_, &lmd_, &lmd_next_, &xn_}) *x = Vec::Zero(nx);
+  for (Vec* x : {&qu_, &W_, &g_, &Fi_, &tau_, &u0_, &dtorque_}) *x = Vec::Zero(n);
+  regularization_ = settings_.regularization;
+}
+
+void RiccatiSolver::set_inputs(const MatX<double>& U) {
+  if (U.rows() != n() || U.cols() != N() || !U.allFinite()) {
+    throw std::invalid_argument("riccati: the inputs must be a finite " + std::to_string(n()) + " x " +
+                                std::to_string(N()) + " matrix");
+  }
+  U_ = U;
+  rolled_out_ = false;
+}
+
+void RiccatiSolver::linearize(double t) {
+  const int n = this->n(), N = this->N(), m = static_cast<int>(joint_.size());
+  const double h = dtau();
+  problem_.set_stage_times(t, h);
+  const StageTerms& terms = problem_.terms();
+  const VecX<double>& R = problem_.weights().R;
+  for (int i = 0; i < N; ++i) {
+    StageLocal& st = stage_[static_cast<size_t>(i)];
+    model_->linearize(terms, i, h, X_.col(i), U_.col(i), st);
+    T_.col(i) = st.tau;
+    // the torque cost and, eliminated, the limits' slacks and multipliers: one weight on τ
+    W_ = h * R;
+    g_ = h * R.cwiseProduct(st.tau - terms.u_ref(i));
+    for (int k = 0; k < m; ++k) {
+      const int j = joint_[static_cast<size_t>(k)];
+      const double s_up = S_(k, i), z_up = Z_(k, i), s_lo = S_(m + k, i), z_lo = Z_(m + k, i);
+      const double r_up = st.tau[j] - upper_[k] + s_up, r_lo = lower_[k] - st.tau[j] + s_lo;
+      W_[j] += z_up / s_up + z_lo / s_lo;
+      g_[j] += (z_up * r_up + mu_[k]) / s_up - (z_lo * r_lo + mu_[k]) / s_lo - recentering(k, terms.u_ref(i)[j]);
+    }
+    model_->add_torque_terms(W_, g_, st);
+    defect_.col(i) = st.x_next - X_.col(i + 1);
+  }
+  model_->terminal(terms, N, X_.col(N), terminal_);
+  evaluations_ += 1;
+  // KKT residual: the reduced gradient of the (barrier) objective in the inputs along the
+  // costates λ_N = ∇φ, λ_i = ℓ_x + Aᵀλ_{i+1} (divided by Δτ: C/GMRES's F), and the defects
+  double sum = defect_.squaredNorm();
+  lmd_ = terminal_.l_x;
+  for (int i = N - 1; i >= 0; --i) {
+    const StageLocal& st = stage_[static_cast<size_t>(i)];
+    Fi_.noalias() = st.l_u + st.B.transpose() * lmd_;
+    sum += Fi_.squaredNorm() / (h * h);
+    lmd_next_.noalias() = st.l_x + st.A.transpose() * lmd_;
+    lmd_.swap(lmd_next_);
+  }
+  kkt_ = std::sqrt(sum);
+  (void)n;
+}
+
+bool RiccatiSolver::backward(double eps) {
+  const int n = this->n(), N = this->N();
+  const double h = dtau();
+  const bool linear = model_->linear_dynamics();
+  P_[static_cast<size_t>(N)] = terminal_.L_xx;
+  p_.col(N) = terminal_.l_x;
+  for (int i = N - 1; i >= 0; --i) {
+    const StageLocal& st = stage_[static_cast<size_t>(i)];
+    const MatX<double>& P = P_[static_cast<size_t>(i + 1)];
+    // A = [I, ΔτI; A_q, A_v], B = [0; B_v]: the Euler step's upper rows are the same in every
+    // formulation; ID's lower rows are (0, I) and ΔτI
+    const auto Pq = P.leftCols(n), Pv = P.rightCols(n);
+    pb_ = p_.col(i + 1);
+    pb_.noalias() += P * defect_.col(i);
+    if (linear) {
+      PA_.leftCols(n) = Pq;
+      PA_.rightCols(n) = h * Pq + Pv;
+      Qxx_.topRows(n) = PA_.topRows(n);
+      Qxx_.bottomRows(n) = h * PA_.topRows(n) + PA_.bottomRows(n);
+      Quu_ = st.L_uu + (h * h) * P.bottomRightCorner(n, n);
+      Qux_ = st.L_ux + h * PA_.bottomRows(n);
+      qx_.head(n) = pb_.head(n);
+      qx_.tail(n) = h * pb_.head(n) + pb_.tail(n);
+      qu_ = st.l_u + h * pb_.tail(n);
+    } else {
+      const auto Aq = st.A.bottomLeftCorner(n, n), Av = st.A.bottomRightCorner(n, n);
+      const auto Bv = st.B.bottomRows(n);
+      PA_.leftCols(n) = Pq;
+      PA_.leftCols(n).noalias() += Pv * Aq;
+      PA_.rightCols(n) = h * Pq;
+      PA_.rightCols(n).noalias() += Pv * Av;
+      Qxx_.topRows(n) = PA_.topRows(n);
+      Qxx_.topRows(n).noalias() += Aq.transpose() * PA_.bottomRows(n);
+      Qxx_.bottomRows(n) = h * PA_.topRows(n);
+      Qxx_.bottomRows(n).noalias() += Av.transpose() * PA_.bottomRows(n);
+      PB_.noalias() = Pv * Bv;
+      Quu_ = st.L_uu;
+      Quu_.noalias() += Bv.transpose() * PB_.bottomRows(n);
+      Qux_ = st.L_ux;
+      Qux_.noalias() += Bv.transpose() * PA_.bottomRows(n);
+      qx_.head(n) = pb_.head(n);
+      qx_.head(n).noalias() += Aq.transpose() * pb_.tail(n);
+      qx_.tail(n) = h * pb_.head(n);
+      qx_.tail(n).noalias() += Av.transpose() * pb_.tail(n);
+      qu_ = st.l_u;
+      qu_.noalias() += Bv.transpose() * pb_.tail(n);
+    }
+    Qxx_ += st.L_xx;
+    qx_ += st.l_x;
+    const double scale = std::max(1e-300, Quu_.diagonal().cwiseAbs().maxCoeff());
+    Quu_.diagonal().array() += eps * scale;
+    Eigen::LLT<MatX<double>>& llt = llt_[static_cast<size_t>(i)];
+    llt.compute(Quu_);
+    if (llt.info() != Eigen::Success) return false;
+    MatX<double>& K = K_[static_cast<size_t>(i)];
+    K = -llt.solve(Qux_);
+    k_.col(i) = -llt.solve(qu_);
+    MatX<double>& Pi = P_[static_cast<size_t>(i)];
+    Pi = Qxx_;
+    Pi.noalias() += Qux_.transpose() * K;
+    Pi = 0.5 * (Pi + Pi.transpose()).eval();
+    p_.col(i) = qx_;
+    p_.col(i).noalias() += Qux_.transpose() * k_.col(i);
+  }
+  return true;
+}
+
+void RiccatiSolver::forward() {
+  const int n = this->n(), N = this->N(), m = static_cast<int>(joint_.size());
+  const double h = dtau();
+  const bool linear = model_->linear_dynamics();
+  const bool input_torque = model_->torque_is_input();
+  dX_.col(0).setZero();  // x_0 is the measured state
+  for (int i = 0; i < N; ++i) {
+    const StageLocal& st = stage_[static_cast<size_t>(i)];
+    const auto dq = dX_.col(i).head(n), dv = dX_.col(i).tail(n);
+    dU_.col(i) = k_.col(i);
+    dU_.col(i).noalias() += K_[static_cast<size_t>(i)] * dX_.col(i);
+    auto next = dX_.col(i + 1);
+    next.head(n) = dq + h * dv + defect_.col(i).head(n);
+    if (linear) {
+      next.tail(n) = dv + h * dU_.col(i) + defect_.col(i).tail(n);
+    } else {
+      next.tail(n) = defect_.col(i).tail(n);
+      next.tail(n).noalias() += st.A.bottomRows(n) * dX_.col(i);
+      next.tail(n).noalias() += st.B.bottomRows(n) * dU_.col(i);
+    }
+    if (m == 0) continue;
+    // the torque's change, then the slacks' and multipliers' steps
+    if (input_torque) {
+      dtorque_ = dU_.col(i);
+    } else {
+      dtorque_.noalias() = st.tau_x * dX_.col(i);
+      dtorque_.noalias() += st.tau_u * dU_.col(i);
+    }
+    for (int k = 0; k < m; ++k) {
+      const int j = joint_[static_cast<size_t>(k)];
+      for (int side = 0; side < 2; ++side) {
+        const int r = side * m + k;
+        const double sign = side == 0 ? 1.0 : -1.0;  // g = τ − upper, lower − τ
+        const double g = side == 0 ? st.tau[j] - upper_[k] : lower_[k] - st.tau[j];
+        const double s = S_(r, i), z = Z_(r, i), res = g + s, dg = sign * dtorque_[j];
+        dS_(r, i) = -res - dg;
+        dZ_(r, i) = z / s * (dg + res) - z + mu_[k] / s;
+      }
+    }
+  }
+}
+
+double RiccatiSolver::recentering(int k, double u_ref) const {
+  // the barrier's slope at the torque reference; subtracted, the barrier pulls nothing off a
+  // target held within the limits (a reference outside them cannot be held anyway)
+  if (!(u_ref > lower_[k] && u_ref < upper_[k])) return 0;
+  return mu_[k] * (1 / (upper_[k] - u_ref) - 1 / (u_ref - lower_[k]));
+}
+
+double RiccatiSolver::max_step(const MatX<double>& s, const MatX<double>& ds) const {
+  double alpha = 1;
+  for (Eigen::Index j = 0; j < s.cols(); ++j) {
+    for (Eigen::Index r = 0; r < s.rows(); ++r) {
+      if (ds(r, j) < 0) alpha = std::min(alpha, -kFractionToBoundary * s(r, j) / ds(r, j));
+    }
+  }
+  return alpha;
+}
+
+double RiccatiSolver::merit(double alpha, double nu) {
+  const int N = this->N(), m = static_cast<int>(joint_.size());
+  const double h = dtau();
+  const StageTerms& terms = problem_.terms();
+  Xt_ = X_ + alpha * dX_;
+  Ut_ = U_ + alpha * dU_;
+  St_ = S_ + alpha * dS_;
+  double total = 0;
+  for (int i = 0; i < N; ++i) {
+    total += model_->evaluate(terms, i, h, Xt_.col(i), Ut_.col(i), xn_, tau_);
+    total += nu * (xn_ - Xt_.col(i + 1)).lpNorm<1>();
+    for (int k = 0; k < m; ++k) {
+      const int j = joint_[static_cast<size_t>(k)];
+      const double s_up = St_(k, i), s_lo = St_(m + k, i);
+      total += nu * (std::abs(tau_[j] - upper_[k] + s_up) + std::abs(lower_[k] - tau_[j] + s_lo));
+      total -= mu_[k] * (std::log(s_up) + std::log(s_lo)) + recentering(k, terms.u_ref(i)[j]) * tau_[j];
+    }
+  }
+  evaluations_ += 1;
+  return total + model_->terminal_cost(terms, N, Xt_.col(N));
+}
+
+void RiccatiSolver::take_step(double alpha, double alpha_dual) {
+  X_ += alpha * dX_;
+  U_ += alpha * dU_;
+  S_ += alpha * dS_;
+  Z_ += alpha_dual * dZ_;
+}
+
+double RiccatiSolver::iterate(double t, In q, In v, bool search) {
+  const int n = this->n();
+  const auto t0 = timing_ ? Clock::now() : Clock::time_point();
+  X_.col(0).head(n) = q;
+  X_.col(0).tail(n) = v;
+  if (!rolled_out_) rollout_and_slacks(t);
+  linearize(t);
+  const double kkt = kkt_;
+  const auto t1 = timing_ ? Clock::now() : Clock::time_point();
+  double eps = regularization_;
+  int tries = 0;
+  while (!backward(eps)) {
+    if (++tries == kRegularizationTries) break;
+    eps *= 10;
+  }
+  forward();
+  const auto t2 = timing_ ? Clock::now() : Clock::time_point();
+  const double alpha_max = max_step(S_, dS_), alpha_dual = max_step(Z_, dZ_);
+  double alpha = alpha_max;
+  if (search) {
+    const double nu = 1 + std::max(p_.cwiseAbs().maxCoeff(), Z_.size() ? Z_.maxCoeff() : 0.0);
+    const double m0 = merit(0, nu);
+    int halvings = 0;
+    while (!(merit(alpha, nu) < m0) && halvings < kLineSearchHalvings) {
+      alpha *= 0.5;
+      ++halvings;
+    }
+    // no decrease: a small step, and more regularization for the next iteration
+    if (halvings == kLineSearchHalvings) eps *= 10;
+  }
+  take_step(alpha, alpha_dual);
+  regularization_ = std::max(settings_.regularization, eps / 10);
+  u0_ = U_.col(0);
+  ++iterations_;
+  if (timing_) {
+    times_.rollout += std::chrono::duration<double>(t1 - t0).count();
+    times_.costate += std::chrono::duration<double>(t2 - t1).count();
+    times_.gmres += seconds_since(t2);
+  }
+  return kkt;
+}
+
+void RiccatiSolver::rollout_and_slacks(double t) {
+  const int N = this->N(), m = static_cast<int>(joint_.size());
+  const double h = dtau();
+  problem_.set_stage_times(t, h);
+  const StageTerms& terms = problem_.terms();
+  for (int i = 0; i < N; ++i) {
+    model_->evaluate(terms, i, h, X_.col(i), U_.col(i), xn_, tau_);
+    X_.col(i + 1) = xn_;
+    T_.col(i) = tau_;
+    for (int k = 0; k < m; ++k) {
+      const int j = joint_[static_cast<size_t>(k)];
+      const double floor = kMinimumSlack * 0.5 * (upper_[k] - lower_[k]);
+      S_(k, i) = std::max(upper_[k] - tau_[j], floor);
+      S_(m + k, i) = std::max(tau_[j] - lower_[k], floor);
+      Z_(k, i) = mu_[k] / S_(k, i);
+      Z_(m + k, i) = mu_[k] / S_(m + k, i);
+    }
+  }
+  rolled_out_ = true;
+}
+
+double RiccatiSolver::initialize(double t, In q, In v) {
+  const int n = this->n();
+  failure_.clear();
+  times_ = {};
+  evaluations_ = 0;
+  iterations_ = 0;
+  regularization_ = settings_.regularization;
+  // the start: every stage holds the measured state (FD: the torque that holds q at rest; ID:
+  // zero acceleration), the trajectory rolled out from there
+  if (problem_.formulation() == Formulation::kForwardDynamics) {
+    const Vec zero = Vec::Zero(n);
+    const Vec hold = rnea(problem_.model(), hold_, Vec(q), zero, zero) - problem_.disturbance();
+    U_ = hold.replicate(1, N());
+  } else {
+    U_.setZero();
+  }
+  X_.col(0).head(n) = q;
+  X_.col(0).tail(n) = v;
+  rolled_out_ = false;
+  const auto t0 = Clock::now();
+  for (int it = 0; it < settings_.init_iterations; ++it) {
+    const double kkt = iterate(t, q, v, true);
+    if (!check_finite()) throw std::runtime_error("riccati start: " + failure_);
+    if (kkt < settings_.init_tolerance) break;
+  }
+  linearize(t);  // the residual where the start ended
+  if (!check_finite()) throw std::runtime_error("riccati start: " + failure_);
+  u0_ = U_.col(0);
+  violation_ = violation();
+  t_ = t;
+  times_.total = seconds_since(t0);
+  return kkt_;
+}
+
+bool RiccatiSolver::update(double t, In q, In v) {
+  IDMPC_CHECK_ARGUMENT(q.size() == n() && v.size() == n(), "RiccatiSolver::update: q and v must have size n");
+  const auto t0 = Clock::now();
+  failure_.clear();
+  times_ = {};
+  evaluations_ = 0;
+  iterations_ = 0;
+  // the warm start: the previous solution moved Δt along its stages
+  const double delta = std::min(1.0, dt_ / dtau());
+  const int N = this->N();
+  for (int i = 0; i + 1 < N; ++i) {
+    U_.col(i) += delta * (U_.col(i + 1) - U_.col(i));
+    S_.col(i) += delta * (S_.col(i + 1) - S_.col(i));
+    Z_.col(i) += delta * (Z_.col(i + 1) - Z_.col(i));
+  }
+  for (int i = 1; i < N; ++i) X_.col(i) += delta * (X_.col(i + 1) - X_.col(i));
+  for (int it = 0; it < settings_.iterations; ++it) {
+    const double kkt = iterate(t, q, v, settings_.line_search);
+    if (it == 0) {
+      violation_ = violation();
+      kkt_first_ = kkt;
+    }
+    if (!check_finite()) return false;
+    if (settings_.tolerance > 0 && kkt < settings_.tolerance) break;
+  }
+  kkt_ = kkt_first_;
+  t_ = t;
+  times_.total = seconds_since(t0);
+  return true;
+}
+
+double RiccatiSolver::violation() const {
+  double worst = 0;
+  for (int i = 0; i < N(); ++i) {
+    for (size_t k = 0; k < joint_.size(); ++k) {
+      const double tau = T_(joint_[k], i);
+      worst = std::max({worst, tau - upper_[static_cast<Eigen::Index>(k)], lower_[static_cast<Eigen::Index>(k)] - tau});
+    }
+  }
+  return worst;
+}
+
+bool RiccatiSolver::check_finite() {
+  if (!X_.allFinite() || !U_.allFinite() || !S_.allFinite() || !Z_.allFinite() || !std::isfinite(kkt_)) {
+    failure_ = "the Riccati solution became non-finite";
+  } else if (!(X_.cwiseAbs().maxCoeff() < kBlowUp) || !(U_.cwiseAbs().maxCoeff() < kBlowUp)) {
+    failure_ = "the Riccati solution exceeded 1e8";
+  } else if (!(kkt_ < kBlowUp)) {
+    failure_ = "the KKT residual exceeded 1e8";
+  } else {
+    return true;
+  }
+  return false;
+}
+
+}  // namespace idmpc

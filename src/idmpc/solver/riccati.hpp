@@ -1,0 +1,142 @@
+#pragma once
+/// @file riccati.hpp
+/// @brief Multiple-shooting Gauss–Newton SQP with a Riccati recursion (docs/solvers.md), one
+/// solver for every formulation: it reads the stages' local models (ocp/local_model.hpp) and
+/// nothing else of them.
+///
+/// Unknowns: the states x_1 … x_N, the inputs u_0 … u_{N−1} (FD torques or ID accelerations),
+/// with x_0 the measured state; horizon T_f fixed, Δτ = T_f/N. An iteration linearizes every stage
+/// at the current trajectory (the defects b_i = f(x_i, u_i) − x_{i+1} stay in the QP), solves the
+/// QP by the backward Riccati recursion and its forward sweep, and steps.
+///
+/// Torque limits (both formulations: FD bounds the input, ID the nonlinear τ(x, a) = ID − d̂) by a
+/// primal-dual interior point: per bounded joint and side a slack s > 0 and a multiplier z > 0,
+/// g(x, u) + s = 0, s∘z = μ, with μ_j = κ·Δτ·R_j·(Δ_j/2)² (κ = RiccatiSettings::barrier: the
+/// barrier's pull relative to the torque cost), the barrier recentred at the torque reference
+/// u_ref (its slope there subtracted) so that it moves no target held within the limits. Slacks
+/// and multipliers are eliminated stage by
+/// stage, so a limit costs one more weight on τ in the stage's Hessian, W = ΔτR + z/s, and
+/// the Riccati recursion is unchanged; steps keep s, z > 0 (fraction to the boundary).
+///
+/// Real-time iteration (RiccatiSettings::iterations = 1, the default): the previous solution
+/// shifted by Δt along the stages is the start of one full step per update. Converged mode
+/// (iterations > 1, tolerance > 0): iterations with a backtracking line search on the ℓ1 merit
+/// (cost + barrier + ν‖defects, g + s‖₁) until the KKT residual falls below the tolerance.
+/// initialize converges from a hold-the-state guess. Regularization: Q_uu + εI with ε raised
+/// tenfold while a stage's Q_uu is not positive definite.
+
+#include <string>
+#include <vector>
+
+#include "idmpc/model/data.hpp"
+#include "idmpc/ocp/local_model.hpp"
+#include "idmpc/solver/mpc_solver.hpp"
+
+namespace idmpc {
+
+struct RiccatiSettings {
+  int iterations = 1;            ///< SQP iterations per update (1: real-time iteration)
+  double tolerance = 0;          ///< … fewer when the KKT residual falls below this (0: all)
+  int init_iterations = 100;     ///< SQP iterations of the start, at most
+  double init_tolerance = 1e-8;  ///< the start's KKT residual
+  double barrier = 1e-3;         ///< κ of the torque limits' barrier weight μ (see above)
+  double regularization = 1e-9;  ///< smallest ε of Q_uu + εI, relative to ‖Q_uu‖'s diagonal
+  bool line_search = false;      ///< also in the updates (the start always searches)
+
+  /// @brief Throws std::invalid_argument naming the first bad setting.
+  void validate() const;
+};
+
+class RiccatiSolver final : public MpcSolver {
+ public:
+  /// @param problem the horizon's problem (its N stages; owned).
+  /// @param Tf horizon length [s] (> 0), @param dt sampling period [s] (> 0).
+  RiccatiSolver(OcpProblem problem, double Tf, double dt, const RiccatiSettings& settings);
+
+  SolverKind kind() const override { return SolverKind::kRiccati; }
+  OcpProblem& problem() override { return problem_; }
+  const OcpProblem& problem() const override { return problem_; }
+  double dt() const override { return dt_; }
+  double initialize(double t, In q, In v) override;
+  bool update(double t, In q, In v) override;
+  const Vec& first_input() const override { return u0_; }
+  const std::string& failure() const override { return failure_; }
+  double residual_norm() const override { return kkt_; }
+  double constraint_violation() const override { return violation_; }
+  int evaluations() const override { return evaluations_; }
+  const UpdateTimes& last_times() const override { return times_; }
+  void enable_timing(bool on) override { timing_ = on; }
+
+  const RiccatiSettings& settings() const { return settings_; }
+  double horizon() const { return Tf_; }
+  /// @brief The current trajectory: states 2n × (N+1) (column 0 the last measured state), inputs
+  /// n × N, and each stage's torque τ (n × N).
+  const MatX<double>& states() const { return X_; }
+  const MatX<double>& inputs() const { return U_; }
+  const MatX<double>& torques() const { return T_; }
+  /// @brief SQP iterations of the last update (or of the start).
+  int iterations() const { return iterations_; }
+  /// @brief The stage Riccati gain K_0 (n × 2n) of the last iteration: du_0 = K_0 dx_0.
+  const MatX<double>& feedback_gain() const { return K_.front(); }
+  /// @brief Warm start: the inputs U (n × N); the states follow by a rollout from x_0 at the next
+  /// update or start.
+  void set_inputs(const MatX<double>& U);
+
+  /// @brief One SQP iteration at time t from the measured x = (q, v), with or without a line
+  /// search; returns the KKT residual at the iterate it started from.
+  double iterate(double t, In q, In v, bool search);
+
+ private:
+  int n() const { return problem_.n(); }
+  int N() const { return problem_.N(); }
+  double dtau() const { return Tf_ / N(); }
+  // every stage's local model at the current trajectory, limits condensed, and the KKT residual
+  void linearize(double t);
+  // backward recursion with regularization ε; false if a Q_uu is not positive definite
+  bool backward(double eps);
+  // the QP's step (dX, dU) from the gains, then (dS, dZ)
+  void forward();
+  // the slope of bounded joint k's barrier at the torque reference u_ref (0 outside the limits)
+  double recentering(int k, double u_ref) const;
+  // the step length that keeps s and z positive
+  double max_step(const MatX<double>& s, const MatX<double>& ds) const;
+  // ℓ1 merit at trajectory + α·step (cost, barrier, constraint residuals); fills the trial trajectory
+  double merit(double alpha, double nu);
+  void take_step(double alpha, double alpha_dual);
+  // the rollout from x_0 with the inputs U (start), slacks and multipliers from its torques
+  void rollout_and_slacks(double t);
+  // stage torques' distance outside the bounds
+  double violation() const;
+  bool check_finite();
+
+  OcpProblem problem_;
+  RiccatiSettings settings_;
+  double Tf_, dt_;
+  std::unique_ptr<LocalModel> model_;
+  std::vector<StageLocal> stage_;
+  TerminalLocal terminal_;
+  // bounded joints: joint index, lower and upper torque, barrier weight μ per stage
+  std::vector<int> joint_;
+  Vec lower_, upper_, mu_;
+  // trajectory: states, inputs, torques, slacks and multipliers (2m × N: upper rows first)
+  MatX<double> X_, U_, T_, S_, Z_;
+  // the QP's step and the trial point of the line search
+  MatX<double> dX_, dU_, dS_, dZ_, Xt_, Ut_, St_;
+  // recursion
+  std::vector<MatX<double>> P_, K_;
+  MatX<double> k_, p_, defect_;
+  std::vector<Eigen::LLT<MatX<double>>> llt_;
+  MatX<double> PA_, PB_, Qxx_, Quu_, Qux_;
+  Vec pb_, qx_, qu_, W_, g_, lmd_, lmd_next_, Fi_, xn_, tau_, dtorque_;
+  Vec u0_;
+  Data hold_;              ///< RNEA of the start's holding torque
+  bool rolled_out_ = false;  ///< whether the states are a trajectory of the inputs (else: roll out first)
+  double t_ = 0;
+  double kkt_ = 0, kkt_first_ = 0, violation_ = 0, regularization_ = 0;
+  int iterations_ = 0, evaluations_ = 0;
+  bool timing_ = false;
+  UpdateTimes times_;
+  std::string failure_;
+};
+
+}  // namespace idmpc
