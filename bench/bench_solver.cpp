@@ -2,7 +2,7 @@
 // on the paper's grids, timed on states of a real closed-loop swing-up and warm-started exactly
 // as in the loop.
 //
-// Fixture (outside timing, once per case): the swing-up of DESIGN §7 (q0 = (−π, 0, …), q_ref = 0,
+// Fixture (outside timing, once per case): the swing-up of mjcf/paper_swingup.json (q0 = (−π, 0, …), q_ref = 0,
 // paper weights) runs in closed loop with the MuJoCo plant and the case's controller for 0.3 s
 // (fewer steps, at least 20, where that would take over ~1.5 s of wall time: counter states),
 // recording the measured (t, q, v) and the solution U of every successful update. The
@@ -17,9 +17,9 @@
 //   Table 3 and the size scaling (n ∈ {4,8,16,24,32,48,64}, N = 25, kmax = 10),
 //   the horizon scaling (n ∈ {4,16}, N ∈ {10,15,25,50,75,100}, kmax = 10);
 // BM_Update/<fd|id>_<matrix|adjoint>_multiple/…: the same controllers under multiple shooting
-//   (DESIGN §9), on Tables 1–3 and n ≤ 32;
+//   (formulations.md §Multiple shooting), on Tables 1–3 and n ≤ 32;
 // BM_Residual/<controller>/n:<n>/N:25 times one F evaluation on the same states and solutions;
-// BM_Update/<controller>_exact/…: with exact products (DESIGN §11), N = 25, kmax = 10, n ≤ 16;
+// BM_Update/<controller>_exact/…: with exact products (formulations.md §Exact products), N = 25, kmax = 10, n ≤ 16;
 // BM_Product/<controller>_exact/n:<n>/N:25 times one exact product with its residual;
 // BM_StageVectorOps/n:<n> times the vector work of one ID stage without its dynamics calls.
 
@@ -75,7 +75,7 @@ const Controller kControllers[] = {
     {Formulation::kForwardDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kMultiple},
     {Formulation::kInverseDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kMultiple},
     {Formulation::kInverseDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kMultiple},
-    // exact products in dual numbers, stage by stage (DESIGN §11; N = 25, kmax = 10, n ≤ 16)
+    // exact products in dual numbers, stage by stage (formulations.md §Exact products; N = 25, kmax = 10, n ≤ 16)
     {Formulation::kForwardDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kSingle, Products::kExact},
     {Formulation::kForwardDynamics, DerivativeMode::kAdjoint, true, ShootingScheme::kSingle, Products::kExact},
     {Formulation::kInverseDynamics, DerivativeMode::kMatrix, true, ShootingScheme::kSingle, Products::kExact},

@@ -318,7 +318,7 @@ def shooting_tables(updates):
     """Single vs multiple shooting per variant, and each formulation's best variant side by side."""
     if not any(k[0].endswith("_multiple") for k in updates):
         return ""
-    out = ["## Single vs multiple shooting (DESIGN §9), and best with best\n",
+    out = ["## Single vs multiple shooting (docs/multiple_shooting.md), and best with best\n",
            "Multiple shooting: states and costates as unknowns, condensed so that GMRES runs on the inputs "
            "(one F evaluation more per update). `*`/`+` as above. *Best*: the fastest of a formulation's "
            "variants (matrix or adjoint derivatives) whose recorded swing-up did not diverge.\n"]

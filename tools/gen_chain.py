@@ -1,5 +1,5 @@
 #!/usr/bin/env -S /usr/bin/python3
-"""Writes the MJCF of a fixed-base chain of n uniform boxes (the paper's plant, DESIGN.md sec. 7).
+"""Writes the MJCF of a fixed-base chain of n uniform boxes (the paper's plant; docs/formulations.md).
 
 Each link is a uniform 1 kg box, 1 m long along the link and 0.1 m x 0.1 m across, hinged at
 its base; q = 0 points every link straight up (+z); gravity is 9.81 m/s^2 along -z; one motor

@@ -72,7 +72,7 @@ struct Cell {
   int n = 0, N = 0, kmax = 0;
   std::string settings;      // hash of everything else the cell runs with (the task as run)
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
-  std::string products = "difference";  // how C/GMRES forms its products (DESIGN §11)
+  std::string products = "difference";  // how C/GMRES forms its products (formulations.md §Exact products)
   std::string latency = "none";         // compute latency (Task::latency)
   // the resume key: every axis and setting the cell runs with. A cell's ID (--list-cells, --cell)
   // is its hash, so an axis added here reaches the cell runs with no other change.
@@ -1375,9 +1375,9 @@ void register_sweep(CLI::App& app) {
                   "both: every task with it on and off, side by side")
       ->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();
-  sub->add_option("--shooting", opt->shooting, "single, multiple or both (DESIGN §9)")->capture_default_str();
+  sub->add_option("--shooting", opt->shooting, "single, multiple or both (docs/multiple_shooting.md)")->capture_default_str();
   sub->add_option("--products", opt->products,
-                  "difference (the paper's forward differences), exact (dual numbers) or both (DESIGN §11)")
+                  "difference (the paper's forward differences), exact (dual numbers) or both (docs/exact_products.md)")
       ->capture_default_str();
   CLI::Option* duration =
       sub->add_option("--duration", opt->duration, "simulated seconds per run (arms: default the task's)")

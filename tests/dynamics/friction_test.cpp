@@ -1,4 +1,4 @@
-// Smooth joint friction f·tanh(v/ε) (DESIGN §10) in every dynamics kernel: on shipped models
+// Smooth joint friction f·tanh(v/ε) (formulations.md §Passive forces) in every dynamics kernel: on shipped models
 // (arm4, xarm7, tree) and seeded random trees made with with_joint_friction (random f in
 // [0.1, 2], ε in [0.01, 0.5], some joints without friction), at random states whose joint
 // velocities cover |v| ≪ ε (slope ≈ f/ε, where a dropped slope shows), |v| ≈ ε (curvature) and

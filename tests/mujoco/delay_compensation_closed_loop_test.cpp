@@ -1,4 +1,4 @@
-// The delay compensation of the ID controller (paper eqs. 27–28, DESIGN §6) in the closed loop
+// The delay compensation of the ID controller (paper eqs. 27–28, formulations.md §The torque rule) in the closed loop
 // with the MuJoCo plant, on the paper's swing-up of the 4-link arm.
 //
 // The update at t_k computes the torque the plant applies over [t_{k+1}, t_{k+2}), when the

@@ -1,4 +1,4 @@
-// MuJoCo's friction loss against the horizon's smooth friction f·tanh(v/ε) (DESIGN §10), on the
+// MuJoCo's friction loss against the horizon's smooth friction f·tanh(v/ε) (formulations.md §Passive forces), on the
 // shipped FR3 as published. MuJoCo solves friction loss as a soft constraint: with no other force
 // on the joint it acts as a saturated viscous law, |τ| = min(f, k·|v|), whose slope k grows with
 // the joint's inertia (its reference acceleration has the constraint's time constant). The test

@@ -1,4 +1,4 @@
-// Compute latency in the closed loop (DESIGN §11): with latency on, the torque computed from the
+// Compute latency in the closed loop (formulations.md §Compute latency): with latency on, the torque computed from the
 // state measured at t reaches the plant ⌈t_compute/δt⌉ plant steps later and is held until the
 // next one arrives; the controller starts no update while it is busy; an update slower than the
 // control period is a deadline miss. With a fixed latency every figure is deterministic, so these
@@ -124,7 +124,7 @@ TEST_P(FixedLatency, NoneIsALatencyOfOnePeriod) {
 
 INSTANTIATE_TEST_SUITE_P(Formulations, FixedLatency, ::testing::Values("fd", "id"));
 
-// none runs the paper's loop (DESIGN §6) unchanged: update at t, the previous torque applied over
+// none runs the paper's loop (formulations.md §The torque rule) unchanged: update at t, the previous torque applied over
 // [t, t + Δt), the new one from t + Δt
 TEST(Latency, NoneRunsThePapersLoop) {
   const Task task = swingup("id", "none");

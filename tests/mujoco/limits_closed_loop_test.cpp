@@ -1,4 +1,4 @@
-// Torque limits in the closed loop (DESIGN §8) on the shipped Panda reach task
+// Torque limits in the closed loop (formulations.md §Torque limits) on the shipped Panda reach task
 // (mjcf/panda_reach.json: home keyframe to a pose across the workspace, limits from the
 // actuators, full-horizon start), under MuJoCo, FD and ID. The limits bind at the start: the
 // controllers command up to them (and, for a few milliseconds, slightly beyond: the clamp holds

@@ -1,4 +1,4 @@
-// The residual is the gradient of the discretized cost (DESIGN §4): with
+// The residual is the gradient of the discretized cost (formulations.md §Rollout, costates and residual): with
 //   J(U) = Σ_i Δτ L(q_i, v_i, a_i, u_i) + φ(q_N, v_N)
 // along the explicit-Euler rollout, the costate recursions are the discrete adjoint, so
 //   F_i = (1/Δτ) ∂J/∂U_i
@@ -63,11 +63,11 @@ Bounds bounds_of(const TorqueLimits& limits, const VecX<double>& R, const VecX<d
   return b;
 }
 
-// J(U) of DESIGN §4 and §8: FD rolls out a_i = FD(q_i, v_i, u_i), ID computes
+// J(U) of formulations.md §Costs and §Torque limits: FD rolls out a_i = FD(q_i, v_i, u_i), ID computes
 // u_i = ID(q_i, v_i, a_i); the torque cost is ½(u − u_ref)ᵀR(u − u_ref). With torque limits each
 // stage block of U is (input, d, ρ) and the stage adds the Lagrangian's ρᵀ(s∘c) − r_dᵀd, with
 // c_k = (u_j − ū_k)² + d_k² − (Δ_k/2)² for the bounded joints j = joint[k]. With a disturbance
-// estimate d̂ (DESIGN §10; empty: none) the model's joint torque is u + d̂: FD rolls out
+// estimate d̂ (formulations.md §Disturbance observer; empty: none) the model's joint torque is u + d̂: FD rolls out
 // a_i = FD(q_i, v_i, u_i + d̂), ID computes u_i = ID(q_i, v_i, a_i) − d̂ (u_ref is the caller's).
 //
 // With `moving` (the references of a moving target and a frame cost), stage i (N: the terminal
@@ -243,7 +243,7 @@ INSTANTIATE_TEST_SUITE_P(
              to_string(std::get<2>(info.param));
     });
 
-// Torque limits (DESIGN §8): the residual is the gradient of the augmented cost — the
+// Torque limits (formulations.md §Torque limits): the residual is the gradient of the augmented cost — the
 // Lagrangian with ρᵀc − r_dᵀd per stage — with respect to every unknown: inputs, dummy inputs and
 // multipliers, F_i = (1/Δτ) ∂J/∂(input_i, d_i, ρ_i). Some joints unbounded, some bounded with
 // the torque of a stage exactly at the bound, the others' limits narrower than the torques;
@@ -340,7 +340,7 @@ TEST_P(OcpGradient, WithTorqueLimitsResidualIsTheGradientOfTheAugmentedCost) {
   }
 }
 
-// Joint friction f·tanh(v/ε) and a disturbance estimate d̂ (DESIGN §10): the model's joint torque
+// Joint friction f·tanh(v/ε) and a disturbance estimate d̂ (formulations.md §Passive forces): the model's joint torque
 // is u + d̂, so the cost rolled out here uses a = FD(q, v, u + d̂) (FD) and u = ID(q, v, a) − d̂
 // (ID), with u_ref = ID(q_ref, 0, 0) − d̂ and the torque limits on u; the model has friction
 // on most joints (random f in [0.1, 2], ε in [0.01, 0.5], every third joint none). Half the
@@ -684,7 +684,7 @@ TEST(OcpTorqueReference, RestAtTheTargetUnderGravityIsStationary) {
 // the rollout maps A ↦ U(A) one to one (u_i = ID(q_i, v_i, a_i)). By the chain rule, at the same
 // trajectory F_ID = (∂U/∂A)ᵀ F_FD: the blocks are M(q_i) on the diagonal and the effect of a_i
 // on later torques below it. Hence F_ID,N−1 = M(q_{N−1}) F_FD,N−1 on the last stage, and both
-// vanish together, which is what "differ only by the factor M(q_i)" (DESIGN §4) means: the
+// vanish together, which is what "differ only by the factor M(q_i)" (formulations.md) means: the
 // same solution, not the same residual away from it.
 constexpr double kChainRule = 1e-6;  // central-difference Jacobian of a smooth map, as above
 constexpr double kLastStage = 1e-9;  // exact identity up to rounding

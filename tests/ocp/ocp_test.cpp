@@ -90,7 +90,7 @@ TEST(OcpFrechetProduct, ForwardDifferenceWithH1e8IsAccurate) {
   }
 }
 
-// Torque limits (DESIGN §8) on some joints, others unbounded, torques on both sides of the
+// Torque limits (formulations.md §Torque limits) on some joints, others unbounded, torques on both sides of the
 // bounds: matrix and adjoint modes and the SIMD lanes agree with limits as without.
 TorqueLimits some_limits(int n, double bound) {
   const double inf = std::numeric_limits<double>::infinity();

@@ -1,4 +1,4 @@
-// C/GMRES (DESIGN §6) on the four controllers (FD/ID × matrix/adjoint): the zero-horizon
+// C/GMRES (formulations.md §C/GMRES) on the four controllers (FD/ID × matrix/adjoint): the zero-horizon
 // initialization solves F = 0, the matrix-free Fréchet products are directional derivatives of
 // F, an update solves the continuation equation and makes F decay as Ḟ = −ζF, and bad
 // settings are refused with a message naming them.
@@ -182,7 +182,7 @@ TEST_P(Continuation, UpdateWithFullKrylovSpaceSolvesTheContinuationEquation) {
   solver.initialize(t, q, v);
   const VecX<double> U = solver.solution();
 
-  // the continuation system as DESIGN §6 writes it, evaluated independently
+  // the continuation system as formulations.md §C/GMRES writes it, evaluated independently
   const double h = s.h, zeta = 1.0 / s.dt, T = solver.horizon(t), Th = solver.horizon(t + h);
   VecX<double> F(dim), Fx(dim);
   probe.residual(U, q, v, T, F);

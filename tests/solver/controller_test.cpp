@@ -1,4 +1,4 @@
-// The Controller owns the paper's timing (eqs. 27–28, DESIGN §6): which torque it returns from
+// The Controller owns the paper's timing (eqs. 27–28, formulations.md §The torque rule): which torque it returns from
 // which solution, measured state and â_0, and the one-step lag with which the closed loop applies
 // it. Each rule is recomputed here from the dynamics kernels, independently of the controller.
 #include <gtest/gtest.h>
@@ -215,7 +215,7 @@ namespace idmpc {
 namespace {
 
 
-// Offset-free tracking (DESIGN §10, controller.hpp): a plant with a constant joint torque d the
+// Offset-free tracking (formulations.md §Disturbance observer, controller.hpp): a plant with a constant joint torque d the
 // controller's model misses, driven by hand with the contract's one-period delay (the torque of
 // the update at t_k acts over [t_{k+1}, t_{k+2})). The plant is the controller's own model (arm4
 // with joint friction f·tanh(v/ε)) plus d, integrated by semi-implicit Euler with our ABA, so the

@@ -1,4 +1,4 @@
-// Exact directional products (DESIGN §11): Shooting::residual_and_product evaluates the residual
+// Exact directional products (formulations.md §Exact products): Shooting::residual_and_product evaluates the residual
 // in dual numbers, so that its tangent part is F'(U)·W. Checked against the residual itself
 // (the values), against central differences (error O(h²): it shrinks 4× when h halves) and
 // forward differences (O(h): 2×), on random points of every shipped model, for both

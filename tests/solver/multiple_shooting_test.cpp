@@ -1,4 +1,4 @@
-// Multiple shooting with condensing (DESIGN §9) on the four controllers (FD/ID × matrix/adjoint),
+// Multiple shooting with condensing (formulations.md §Multiple shooting) on the four controllers (FD/ID × matrix/adjoint),
 // with and without torque limits: the residual at stored trajectories is that of single shooting
 // when they are the rollout; the condensed sweep retrieves stored trajectories from their
 // defects; the condensed C/GMRES direction solves the uncondensed continuation system (states and
@@ -264,7 +264,7 @@ TEST_P(MultipleShooting, TheCondensedDirectionSolvesTheUncondensedSystem) {
 // the same U; under multiple shooting the defects vanish too. Undamped Newton needs a close
 // start, FD the closer: a 1 % kick of FD's torques gives ‖F‖ ≈ 360, from which even a dense
 // Newton diverges, and with limits a 10 % kick of (d, ρ) lands ID on the mirrored KKT point
-// d < 0, ρ < 0 (under both schemes alike). With exact products (DESIGN §11) both schemes reach the
+// d < 0, ρ < 0 (under both schemes alike). With exact products (formulations.md §Exact products) both schemes reach the
 // same solution as with differences. Measured on the way: multiple shooting's first step
 // takes FD from ‖F‖ = 22 to 1e-3, single shooting's to 0.09; for ID the two are alike.
 TEST_P(MultipleShooting, BothSchemesConvergeToTheSameSolution) {

@@ -1,6 +1,6 @@
-// The acceptance test: the paper's swing-up of the 4-link arm (DESIGN §7) closed-loop with the
+// The acceptance test: the paper's swing-up of the 4-link arm (formulations.md §The paper's experiment) closed-loop with the
 // MuJoCo plant, by C/GMRES on forward dynamics and on inverse dynamics, each with matrix and
-// adjoint derivatives, under single and under multiple shooting (DESIGN §9). All eight must
+// adjoint derivatives, under single and under multiple shooting (formulations.md §Multiple shooting). All eight must
 // swing up and hold; with Q_a = 0 the FD and ID controllers
 // solve the same optimality conditions, so their torques must nearly coincide. Divergence is a
 // result, never an exception.

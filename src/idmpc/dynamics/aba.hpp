@@ -1,7 +1,7 @@
 #pragma once
 /// @file aba.hpp
 /// @brief Articulated-body algorithm (Featherstone 2008, Table 7.1) with armature and passive
-/// forces: FD(q, v, τ) = M⁻¹(τ − c + passive) (DESIGN §2), and M⁻¹x reusing its factorization.
+/// forces: FD(q, v, τ) = M⁻¹(τ − c + passive) (formulations.md §The model), and M⁻¹x reusing its factorization.
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/model/joint.hpp"

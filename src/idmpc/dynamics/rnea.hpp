@@ -1,7 +1,7 @@
 #pragma once
 /// @file rnea.hpp
 /// @brief Recursive Newton–Euler algorithm (Featherstone 2008, Table 5.1) with armature and
-/// passive joint forces: ID(q, v, a) = M a + c(q, v) − passive(q, v) (DESIGN §2).
+/// passive joint forces: ID(q, v, a) = M a + c(q, v) − passive(q, v) (formulations.md §The model).
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/model/joint.hpp"

@@ -1,6 +1,6 @@
 #pragma once
 /// @file rnea_vjp.hpp
-/// @brief Vector–Jacobian products of RNEA in one O(n) reverse sweep (DESIGN §5):
+/// @brief Vector–Jacobian products of RNEA in one O(n) reverse sweep (formulations.md §Derivatives):
 /// (∂ID/∂q)ᵀw, (∂ID/∂v)ᵀw and (∂ID/∂a)ᵀw = M·w, by reverse-mode differentiation of the
 /// link-frame recursion of rnea.hpp.
 ///

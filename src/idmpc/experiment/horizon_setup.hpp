@@ -1,7 +1,7 @@
 #pragma once
 /// @file horizon_setup.hpp
 /// @brief What a task becomes on a given robot: the model both formulations' horizons use (the
-/// plant's passive forces, DESIGN §10) and the weights the task leaves "auto". Everything chosen
+/// plant's passive forces, formulations.md §Passive forces) and the weights the task leaves "auto". Everything chosen
 /// here is chosen the same way for FD and ID, so that a comparison stays one of formulations,
 /// and each automatic choice is stated in `notes`.
 ///

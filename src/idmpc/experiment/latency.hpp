@@ -1,6 +1,6 @@
 #pragma once
 /// @file latency.hpp
-/// @brief Compute latency in the closed loop (DESIGN §11): how long a control update takes before
+/// @brief Compute latency in the closed loop (formulations.md §Compute latency): how long a control update takes before
 /// its torque reaches the plant. `none` is the paper's timing (eqs. 27–28: every update's torque
 /// is applied one control period after its measurement, however long it took); `measured` takes
 /// each update's wall time; a fixed figure in ms simulates another CPU.

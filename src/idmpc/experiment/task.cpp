@@ -404,7 +404,7 @@ ResolvedTask resolve(const Task& t, int n) {
   };
   r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa.empty() ? std::vector<double>{0} : t.Qa, "Qa"),
                          weight(t.R, "R")};
-  // the problem must be strictly convex in its decision variable (DESIGN §4–5); "auto" R is positive
+  // the problem must be strictly convex in its decision variable (formulations.md §Costs); "auto" R is positive
   const VecX<double>& R = r.weights.R;
   const VecX<double>& Qa = r.weights.Qa;
   for (int j = 0; j < n && R.size() == n; ++j) {

@@ -44,7 +44,7 @@
 ///                  else qref (one value per joint); it starts at the target's start value
 ///   "tracking_tolerance" a frame target counts as reached when the position error [m] is
 ///                  below it: its RMS over the run with a reference, at the end without
-///   "latency"      compute latency in the closed loop (DESIGN §11): "none" (the paper's timing, the
+///   "latency"      compute latency in the closed loop (formulations.md §Compute latency): "none" (the paper's timing, the
 ///                  default), "measured" (each update's wall time) or a compute time in ms (a
 ///                  number): the torque of an update reaches the plant ⌈t_compute/δt⌉ plant steps
 ///                  after its measurement (mj::ClosedLoopSettings::latency)
@@ -56,7 +56,7 @@
 ///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
 ///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
-///                  "shooting": "single" or "multiple" (DESIGN §9)}
+///                  "shooting": "single" or "multiple" (formulations.md §Multiple shooting)}
 
 #include <optional>
 #include <string>
@@ -110,7 +110,7 @@ struct Task {
   double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
   bool init_full_horizon = false;
   std::string shooting;  ///< "single" or "multiple"
-  std::string products;  ///< "difference" or "exact" (DESIGN §11)
+  std::string products;  ///< "difference" or "exact" (formulations.md §Exact products)
   std::string latency = "none";  ///< "none", "measured" or a compute time in ms (parse_latency)
   std::string solver = "cgmres";  ///< "cgmres" or "riccati"
   RiccatiSettings riccati;        ///< the Riccati solver's settings

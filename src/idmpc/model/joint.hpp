@@ -185,7 +185,7 @@ struct ArmaturePassivePartials {
 };
 
 /// @brief Joint friction f·tanh(v/ε): a smooth stand-in for MuJoCo's friction loss, which is a
-/// dry-friction constraint force of magnitude ≤ f (DESIGN §10). Zero where f = 0.
+/// dry-friction constraint force of magnitude ≤ f (formulations.md §Passive forces). Zero where f = 0.
 template <typename S> S joint_friction(const Model& model, int i, const S& v) {
   using std::tanh;
   const double f = model.friction[i];
@@ -203,7 +203,7 @@ template <typename S> S friction_slope(const Model& model, int i, const S& v) {
   return (f * inv_eps) * (S(1) - t * t);
 }
 
-/// @brief Joint i's own terms of ID(q, v, a)_i besides the bodies' (DESIGN §2–§3, §10):
+/// @brief Joint i's own terms of ID(q, v, a)_i besides the bodies' (formulations.md §The model, §Passive forces):
 /// armature·a + d·v + k·(q − q_spring) + f·tanh(v/ε), i.e. the armature's inertia minus
 /// MuJoCo's passive force −d·v − k·(q − q_spring) and the smooth friction. Linear in (q, v, a)
 /// but for the friction: its partials are armature_passive_partials plus friction_slope in v.

@@ -92,7 +92,7 @@ class Model {
 /// dynamics are τ = M q̈ + c + D v⁺. Throws std::invalid_argument for dt < 0 or non-finite.
 Model with_implicit_damping(const Model& model, double dt);
 
-/// @brief The model with joint friction f·tanh(v/ε) (DESIGN §10): MuJoCo's friction loss, a
+/// @brief The model with joint friction f·tanh(v/ε) (formulations.md §Passive forces): MuJoCo's friction loss, a
 /// dry-friction constraint force of magnitude ≤ f, made smooth for the horizon. `friction` and
 /// `velocity` have size n; ε must be positive where f is. Throws std::invalid_argument
 /// otherwise, naming the joint.

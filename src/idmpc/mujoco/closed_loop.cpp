@@ -139,7 +139,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   UpdateTimes phase_sum;
   const double period_ms = 1e3 * dt;
 
-  // compute latency (DESIGN §11): plant steps are counted in MuJoCo steps δt, `substeps` per
+  // compute latency (formulations.md §Compute latency): plant steps are counted in MuJoCo steps δt, `substeps` per
   // control period; the torque of the last update waits for its arrival, the controller is busy
   // until control step `free_at`, and the observer learns the mean torque the plant applied since
   // the last update's measurement

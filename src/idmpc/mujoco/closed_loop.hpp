@@ -1,8 +1,8 @@
 #pragma once
 /// @file closed_loop.hpp
 /// @brief Simulation in the loop: every Δt the controller reads (q, v) from the MuJoCo plant,
-/// runs one C/GMRES update and applies its torque for one plant step (DESIGN §6), or, with
-/// compute latency, as soon as its computation ends (DESIGN §11).
+/// runs one C/GMRES update and applies its torque for one plant step (formulations.md §The torque rule), or, with
+/// compute latency, as soon as its computation ends (formulations.md §Compute latency).
 
 #include <functional>
 #include <limits>
@@ -42,7 +42,7 @@ struct ClosedLoopSettings {
   bool phase_timing = true;  ///< split each update's time into rollout/costate/GMRES
   long kept_update_times = kKeptUpdateTimes;  ///< RunResult::update_ms keeps at most this many
   TrackingSettings tracking;  ///< what the tracking error is measured against (none by default)
-  /// @brief Compute latency (DESIGN §11). none: the paper's timing, every update's torque applied
+  /// @brief Compute latency (formulations.md §Compute latency). none: the paper's timing, every update's torque applied
   /// over the period after its measurement. On: the torque computed from the state measured at t
   /// reaches the plant at t + ⌈t_compute/δt⌉·δt (δt the plant's MuJoCo step; t_compute the
   /// update's wall time, or the fixed figure) and is held until the next one arrives; the

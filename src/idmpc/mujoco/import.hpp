@@ -1,6 +1,6 @@
 #pragma once
 /// @file import.hpp
-/// @brief mjModel → Model, following DESIGN §3 exactly, plus how torques reach the plant.
+/// @brief mjModel → Model, following formulations.md §The model exactly, plus how torques reach the plant.
 
 #include <string>
 #include <vector>

@@ -27,7 +27,7 @@ class Plant {
   /// a reason if the state became non-finite or MuJoCo raised a warning (e.g. bad qacc).
   bool step(const VecX<double>& tau, std::string* reason);
   /// @brief One step whose torque changes within it, as a late torque arrives (compute latency,
-  /// DESIGN §11): τ_before for the first `switch_at` of its substeps() MuJoCo steps (0 to
+  /// formulations.md §Compute latency): τ_before for the first `switch_at` of its substeps() MuJoCo steps (0 to
   /// substeps()), τ_after for the rest. Returns as step().
   bool step(const VecX<double>& tau_before, int switch_at, const VecX<double>& tau_after, std::string* reason);
 

@@ -48,7 +48,7 @@ TaskRun::TaskRun(const Task& task)
   if (task.qref_start) resolved_.qref = resolved_.q0;
   set_up_references();
 
-  // the actuators' ranges, narrowed by the task's limit: constraints of the horizon (DESIGN §8)
+  // the actuators' ranges, narrowed by the task's limit: constraints of the horizon (formulations.md §Torque limits)
   // and the clamp of every torque the plant receives
   lower_ = imported_.actuation.torque_lower.cwiseMax(-resolved_.torque_limit);
   upper_ = imported_.actuation.torque_upper.cwiseMin(resolved_.torque_limit);
@@ -56,7 +56,7 @@ TaskRun::TaskRun(const Task& task)
     if (!std::isfinite(lower_[j]) && !std::isfinite(upper_[j])) unbounded_.push_back(model_->joint_names[j]);
   }
 
-  // the horizon's model (the plant's passive forces, DESIGN §10) and the "auto" weights, the
+  // the horizon's model (the plant's passive forces, formulations.md §Passive forces) and the "auto" weights, the
   // same for both formulations
   plant_ = std::make_unique<Plant>(m, imported_.actuation);
   const std::string timestep_warning = plant_->set_control_period(resolved_.cgmres.dt);

@@ -1,10 +1,10 @@
 #pragma once
 /// @file cost.hpp
-/// @brief The costs of DESIGN §4 (paper eqs. 32–34), by their gradients — all the optimality
+/// @brief The costs of formulations.md §Costs (paper eqs. 32–34), by their gradients — all the optimality
 /// conditions need:
 ///   φ(q, v)       = ½(q − q_ref)ᵀQ_q(q − q_ref) + ½(v − v_ref)ᵀQ_v(v − v_ref) + φ_frame(q)  (terminal)
 ///   L(q, v, a, u) = φ(q, v) + ½aᵀQ_a a + ½(u − u_ref)ᵀR(u − u_ref)   (stage; Q_a only in ID)
-/// u_ref is the torque that holds the target (DESIGN §8). v_ref is zero but for a
+/// u_ref is the torque that holds the target (formulations.md §Torque reference). v_ref is zero but for a
 /// moving joint reference (its rate); φ_frame is the cost of an optional frame target
 /// (FrameTarget). QuadraticCost holds the weights and the fixed joint target; the references
 /// each stage sees, moving or not, are StageTerms' (stage_terms.hpp).

@@ -1,6 +1,6 @@
 #pragma once
 /// @file fd_stages.hpp
-/// @brief The forward-dynamics problem's stages (DESIGN §4, input = torque u_i):
+/// @brief The forward-dynamics problem's stages (formulations.md §FD, input = torque u_i):
 ///   a_i = FD(q_i, v_i, u_i + d̂),  μ_i = M(q_i)⁻¹γ_{i+1},
 ///   ∂H/∂u = w + μ,  ∂H/∂q = ∂L/∂q − (∂ID/∂q)ᵀμ,  ∂H/∂v = ∂L/∂v + λ_{i+1} − (∂ID/∂v)ᵀμ
 /// with w = ∂(L + ρᵀ(s∘c))/∂u (StageTerms::torque_gradient).

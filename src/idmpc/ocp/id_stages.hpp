@@ -1,6 +1,6 @@
 #pragma once
 /// @file id_stages.hpp
-/// @brief The inverse-dynamics problem's stages (DESIGN §4, input = acceleration a_i; paper eqs.
+/// @brief The inverse-dynamics problem's stages (formulations.md §ID, input = acceleration a_i; paper eqs.
 /// 12, 16, 18, 22–25):
 ///   u_i = ID(q_i, v_i, a_i) − d̂,  w_i = ∂(L + ρᵀ(s∘c))/∂u,
 ///   ∂H/∂a = γ_{i+1} + Q_a a + M w,  ∂H/∂q = ∂L/∂q + (∂ID/∂q)ᵀw,  ∂H/∂v = ∂L/∂v + λ_{i+1} + (∂ID/∂v)ᵀw.

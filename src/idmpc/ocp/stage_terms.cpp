@@ -158,7 +158,7 @@ void StageTerms::set_stage_times(double t0, double dtau) {
 
 void StageTerms::update_joint_references() {
   // the gravity and spring torque that holds each stage's target, less what the model misses
-  // (DESIGN §8, §10); a fixed target is one RNEA, copied to every stage
+  // (formulations.md §Torque reference); a fixed target is one RNEA, copied to every stage
   if (joint_trajectory_) {
     if (!sampled_) return;  // until set_stage_times
     for (int i = 0; i <= N_; ++i) {

@@ -1,8 +1,8 @@
 #pragma once
 /// @file stage_terms.hpp
 /// @brief What every stage of a problem shares, whatever its formulation: the model, the costs
-/// with the references each stage sees, the torque bounds and the disturbance estimate (DESIGN
-/// §4, §8, §10), and the parts of a stage's Hamiltonian that do not involve the dynamics. The
+/// with the references each stage sees, the torque bounds and the disturbance estimate (see
+/// formulations.md), and the parts of a stage's Hamiltonian that do not involve the dynamics. The
 /// stage models (fd_stages.hpp, id_stages.hpp) add the dynamics' part.
 ///
 /// References: stage i = 0 … N (N: the terminal cost) sees the joint target q_ref,i with
@@ -30,7 +30,7 @@ class StageTerms {
   using Vec = VecX<double>;
   using In = Eigen::Ref<const Vec>;
   using Out = Eigen::Ref<Vec>;
-  /// The same in dual numbers (exact directional derivatives, DESIGN §11): every stage function
+  /// The same in dual numbers (exact directional derivatives, formulations.md §Exact products): every stage function
   /// below has an overload for them, with the references constants.
   using DualIn = Eigen::Ref<const VecX<Dual>>;
   using DualOut = Eigen::Ref<VecX<Dual>>;

@@ -1,6 +1,6 @@
 #pragma once
 /// @file torque_limits.hpp
-/// @brief Torque limits u_min ≤ u ≤ u_max as DESIGN §8 puts them into C/GMRES (Ohtsuka 2004,
+/// @brief Torque limits u_min ≤ u ≤ u_max as formulations.md §Torque limits puts them into C/GMRES (Ohtsuka 2004,
 /// autogenu's control-input bounds): for each bounded joint j a dummy input d_j and a
 /// multiplier ρ_j join the stage's unknowns, with the equality constraint and the dummy's cost
 ///   s_j c_j = 0,  c_j = (u_j − ū_j)² + d_j² − (Δ_j/2)²,  ū = (u_max + u_min)/2,  Δ = u_max − u_min
@@ -8,8 +8,8 @@
 /// The stage Hamiltonian gains ρᵀ(s∘c) − r_dᵀd, hence
 ///   ∂H/∂u_j += 2 s_j ρ_j (u_j − ū_j),   ∂H/∂d_j = −r_d,j + 2 s_j ρ_j d_j,   ∂H/∂ρ_j = s_j c_j.
 ///
-/// Scaling (beyond DESIGN §8, which has s = 1): s_j = R_j / Δ_j states the same constraint in
-/// the units of the torque gradient R(u − u_ref) — ρ is DESIGN's multiplier divided by s. With
+/// Scaling (the plain form has s = 1): s_j = R_j / Δ_j states the same constraint in
+/// the units of the torque gradient R(u − u_ref) — ρ is the plain multiplier divided by s. With
 /// s = 1 the rows c (torque², ~10³–10⁴ on an arm) swamp the input rows (~R·torque) and neither
 /// C/GMRES's kmax = 10 GMRES nor the Newton start can solve the stage block (measured on the
 /// Panda: the initialization stalls at ‖F‖ ≈ 10, the closed loop diverges).

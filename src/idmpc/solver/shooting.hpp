@@ -1,6 +1,6 @@
 #pragma once
 /// @file shooting.hpp
-/// @brief The optimality residual of an OcpProblem (DESIGN §4, §9) under both shooting schemes.
+/// @brief The optimality residual of an OcpProblem (formulations.md) under both shooting schemes.
 ///
 /// Single shooting: F(U, x) of the inputs U = (u_0 … u_{N−1}) or (a_0 … a_{N−1}), by an
 /// explicit-Euler rollout from the measured state (eq. 12) and a backward costate sweep (eqs. 16,
@@ -11,7 +11,7 @@
 /// `defects`): the trajectories they retrieve satisfy the state and costate equations up to
 /// exactly those defects, so F_U there is a function of U alone and GMRES still runs on U.
 ///
-/// With torque limits (DESIGN §8) each stage's block of U is (input, dummy inputs d, multipliers
+/// With torque limits (formulations.md §Torque limits) each stage's block of U is (input, dummy inputs d, multipliers
 /// ρ), OcpProblem::stage_dim() long. The problem supplies the stage kernels; only the chaining of
 /// stages lives here.
 
@@ -30,7 +30,7 @@ struct OcpTimes {
   long evaluations = 0;
 };
 
-/// @brief Defects of multiple shooting's state and costate equations (DESIGN §9), n × (N+1)
+/// @brief Defects of multiple shooting's state and costate equations (formulations.md §Multiple shooting), n × (N+1)
 /// each. Column i of q, v (i = 0 … N−1): stage i's Euler state equation,
 /// q_{i+1} − q_i − Δτ v_i and v_{i+1} − v_i − Δτ a_i. Column i of lmd, gmm: the costate equation,
 /// λ_i − λ_{i+1} − Δτ ∂H_i/∂q and γ_i − γ_{i+1} − Δτ ∂H_i/∂v for i = 1 … N−1, λ_N − ∂φ/∂q and
@@ -96,7 +96,7 @@ class Shooting {
 
   /// @brief The residual of the full horizon and its exact directional derivative along W:
   /// F = residual(U, q0, v0, T, defects) and dF = (∂F/∂U)·W at fixed state, time and defects,
-  /// by one evaluation in dual numbers (DESIGN §11): the same stage arithmetic, stage by stage,
+  /// by one evaluation in dual numbers (formulations.md §Exact products): the same stage arithmetic, stage by stage,
   /// each operation carrying its tangent. No increment, no cancellation: dF is exact up to
   /// rounding. Needs enable_exact_products (std::logic_error otherwise); allocation-free after
   /// it. Fills trajectory() with the values.

@@ -3,7 +3,7 @@
 /// @brief Dual numbers x + ε·dx with ε² = 0 (forward-mode differentiation): a function
 /// evaluated at x + ε·w, every operation carried out on both parts, gives f(x) + ε·f'(x)·w, the
 /// directional derivative exact up to rounding, with no increment to choose. Usable, as Pack, as
-/// the scalar of the templated dynamics and of the problem's stage computations (DESIGN §11):
+/// the scalar of the templated dynamics and of the problem's stage computations (formulations.md §Exact products):
 /// the exact products F'(U)·W of C/GMRES.
 ///
 /// Only arithmetic, sin/cos, sqrt, tanh and equality (of both parts; Eigen's products ask for it)
