@@ -1,9 +1,9 @@
 #pragma once
 /// @file problem.hpp
-/// @brief The two optimal control problems of DESIGN §4 behind one stage interface: forward
+/// @brief The two optimal control problems of formulations.md behind one stage interface: forward
 /// dynamics (input = torque u_i, the paper's classic form; FdStages) and inverse dynamics (input =
 /// acceleration a_i, paper eqs. 12, 16, 18, 22–25; IdStages), each with derivatives by full
-/// matrices (the paper's way) or by O(n) adjoint sweeps (DESIGN §5), with or without stages in
+/// matrices (the paper's way) or by O(n) adjoint sweeps (formulations.md §Derivatives), with or without stages in
 /// SIMD lanes. The combination is a type, chosen at construction (and by set_stages_in_lanes).
 ///
 /// A problem knows one stage at a time: its dynamics, and the derivatives of its discrete
@@ -40,10 +40,10 @@ class OcpProblem {
   /// @param model shared, never modified; the problem keeps it alive.
   /// @param N horizon stages (≥ 1): one workspace each, sized by the formulation and mode, kept
   /// between the sweeps.
-  /// @param limits torque limits (DESIGN §8; default none): each bounded joint adds a dummy
+  /// @param limits torque limits (formulations.md §Torque limits; default none): each bounded joint adds a dummy
   /// input and a multiplier to every stage.
   /// The torque reference of `cost` is set to u_ref = ID(q_ref, 0, 0), the gravity and spring
-  /// torque that holds the target (DESIGN §8). Stages run in SIMD lanes where they can (see
+  /// torque that holds the target (formulations.md §Torque reference). Stages run in SIMD lanes where they can (see
   /// set_stages_in_lanes). Throws std::invalid_argument on a null model, bad sizes, weights or
   /// limits.
   OcpProblem(std::shared_ptr<const Model> model, Formulation formulation, DerivativeMode mode, QuadraticCost cost,
@@ -80,7 +80,7 @@ class OcpProblem {
   void set_dummy_weight_factor(double f) { terms_.bounds().set_dummy_weight_factor(f); }
   /// @brief m: bounded joints, each with a dummy input and a multiplier per stage.
   int m() const { return terms_.m(); }
-  /// @brief The estimate d̂ of the joint torque the model misses (DESIGN §10: friction error,
+  /// @brief The estimate d̂ of the joint torque the model misses (formulations.md §Disturbance observer: friction error,
   /// contacts, payload): the model's joint torque is τ = u + d̂ for the actuators' torque u.
   /// FD: a = FD(q, v, u + d̂); ID: u = ID(q, v, a) − d̂. The torque reference becomes
   /// u_ref = ID(q_ref, 0, 0) − d̂ and the torque limits stay on u. Zero until set; size n, finite
@@ -148,7 +148,7 @@ class OcpProblem {
   /// linearization of evaluation `ev`, with the dummy inputs d and multipliers ρ (size m):
   /// F = (∂H/∂input, ∂H/∂d, ∂H/∂ρ) (size stage_dim), the stage's block F_i of the optimality
   /// residual; with `state` also hq = ∂H/∂q and hv = ∂H/∂v, so that the Euler costates are
-  /// λ_i = λ_{i+1} + Δτ hq, γ_i = γ_{i+1} + Δτ hv (DESIGN §4). Without `state` (stage 0), hq
+  /// λ_i = λ_{i+1} + Δτ hq, γ_i = γ_{i+1} + Δτ hv (formulations.md §Rollout, costates and residual). Without `state` (stage 0), hq
   /// and hv are untouched. Throws std::logic_error if the stage has no linearization of `ev`.
   void stage_hamiltonian(Evaluation ev, int i, In q, In v, In a, In u, In d, In rho, In lmd_next, In gmm_next,
                          Out hq, Out hv, Out F, bool state) {
@@ -165,7 +165,7 @@ class OcpProblem {
   }
 
   /// @brief The stage calls above in dual numbers (StageModel): the same arithmetic, stage by
-  /// stage, with the tangents carried along (exact directional products, DESIGN §11). Need
+  /// stage, with the tangents carried along (exact directional products, formulations.md §Exact products). Need
   /// reserve_dual first.
   using DualIn = StageModel::DualIn;
   using DualOut = StageModel::DualOut;

@@ -75,7 +75,7 @@ class StageModel {
   /// @brief Bytes of heap the stages' workspaces own (the per-stage ones and the lanes').
   virtual std::size_t workspace_bytes() const = 0;
 
-  /// @brief dynamics and hamiltonian in dual numbers (DESIGN §11): the same arithmetic as the
+  /// @brief dynamics and hamiltonian in dual numbers (formulations.md §Exact products): the same arithmetic as the
   /// stage's own in its derivative mode, stage by stage (never in lanes), each operation also
   /// carried on the tangents, so that the tangent parts are the exact directional derivatives.
   /// Needs reserve_dual first (std::logic_error otherwise); their kept linearizations are stamped

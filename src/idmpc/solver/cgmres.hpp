@@ -1,6 +1,6 @@
 #pragma once
 /// @file cgmres.hpp
-/// @brief Continuation/GMRES (Ohtsuka 2004, DESIGN §6, §9), one solver for every problem and
+/// @brief Continuation/GMRES (Ohtsuka 2004, formulations.md §C/GMRES, §Multiple shooting), one solver for every problem and
 /// both shooting schemes:
 /// Ḟ = −ζF is tracked by solving (∂F/∂U) U̇ = −ζF − (∂F/∂x)ẋ − ∂F/∂t with matrix-free
 /// products (forward differences, the paper's way, or exact ones in dual numbers: Products) and
@@ -27,13 +27,13 @@
 
 namespace idmpc {
 
-/// @brief How the horizon's stages are chained (DESIGN §9).
+/// @brief How the horizon's stages are chained (formulations.md §Multiple shooting).
 enum class ShootingScheme { kSingle, kMultiple };
 /// @brief "single"/"multiple"; parse throws std::invalid_argument naming the value.
 std::string to_string(ShootingScheme s);
 ShootingScheme parse_shooting(const std::string& s);
 
-/// @brief How C/GMRES forms its products (∂F/∂U)·W (DESIGN §11): by the paper's forward
+/// @brief How C/GMRES forms its products (∂F/∂U)·W (formulations.md §Exact products): by the paper's forward
 /// difference [F(U + hW) − F(U)]/h, or exactly, by one evaluation in dual numbers
 /// (Shooting::residual_and_product).
 enum class Products { kDifference, kExact };

@@ -3,14 +3,14 @@
 /// @brief The NMPC controller of the paper's closed loop: the problem, its shooting
 /// residual, the C/GMRES solver and the torque rule of eqs. 27–28, in one place.
 ///
-/// Timing (DESIGN §6): the update made at time t from the measured x(t) yields the torque
+/// Timing (formulations.md §The torque rule): the update made at time t from the measured x(t) yields the torque
 /// applied over [t + Δt, t + 2Δt), i.e. one sampling period later; the torque of the
 /// zero-horizon solution at t = 0 is applied over the first period.
 ///   FD: τ = u_0 of the new solution (â_0 is not used).
 ///   ID: τ = ID(q + Δt v, v + Δt â_0, a_0) − d̂, a_0 from the new solution and â_0 the a_0 of
 ///       the previous one, which the plant is executing while the controller computes.
 ///
-/// Offset-free tracking (DESIGN §10), off unless enabled: a disturbance observer estimates the
+/// Offset-free tracking (formulations.md §Disturbance observer), off unless enabled: a disturbance observer estimates the
 /// joint torque d̂ the model misses from each measured velocity change,
 ///   d̂ ← (1 − β) d̂ + β (ID(q⁻, v⁻, (v − v⁻)/Δt) − τ⁻),   β = Δt / T_obs,
 /// with (q⁻, v⁻) the previous measurement and τ⁻ the torque applied over [t − Δt, t) (known from
@@ -49,13 +49,13 @@ struct ControllerSettings {
   std::optional<FrameTarget> frame_target;
   /// @brief The frame target's position moving as p_ref(t); null: FrameTarget::position.
   std::shared_ptr<const Trajectory> frame_reference;
-  /// @brief The actuators' torque range, given once: the horizon's constraints (DESIGN §8) on
+  /// @brief The actuators' torque range, given once: the horizon's constraints (formulations.md §Torque limits) on
   /// every joint bounded on both sides, and the clamp of every torque the controller returns.
   /// Empty: unbounded; ±infinity per joint: that joint unbounded.
   VecX<double> torque_lower, torque_upper;
   /// @brief false: the limits only clamp the returned torque; the horizon is unconstrained.
   bool limits_in_horizon = true;
-  double observer_time_constant = 0;  ///< disturbance observer (DESIGN §10); 0: off
+  double observer_time_constant = 0;  ///< disturbance observer (formulations.md §Disturbance observer); 0: off
   bool simd_stages = true;            ///< stages in SIMD lanes where independent
   /// @brief The model of the horizon, when it differs from the plant's (implicit damping over
   /// the horizon step, smoothed friction); null: the controller's model.
@@ -111,8 +111,8 @@ class Controller {
   /// and torque() is τ(t + Δt); on divergence returns false and failure() says why.
   bool update(double t, In q, In v);
 
-  /// @brief One control update in a loop whose torques arrive late (compute latency, DESIGN
-  /// §11): as update(t, q, v), but the observer learns what the plant did since the previous
+  /// @brief One control update in a loop whose torques arrive late (compute latency, formulations.md
+  /// §Compute latency): as update(t, q, v), but the observer learns what the plant did since the previous
   /// measurement, `interval` seconds (> 0) under the mean torque `tau_applied`, instead of
   /// assuming one period under the previous update's torque.
   bool update(double t, In q, In v, double interval, In tau_applied);
