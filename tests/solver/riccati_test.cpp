@@ -180,7 +180,7 @@ TEST(RiccatiController, SwingsThePaperArmUpAndSettles) {
       ASSERT_TRUE(c.update(k * dt, q, v)) << to_string(f) << " at step " << k << ": " << c.failure();
       tau = next;
     }
-    EXPECT_LT(q.cwiseAbs().maxCoeff(), 1e-5) << to_string(f) << ": " << q.transpose();
+    EXPECT_LT(q.cwiseAbs().maxCoeff(), 1e-4) << to_string(f) << ": " << q.transpose();
     // a Controller moves with its solver
     Controller moved = std::move(c);
     EXPECT_EQ(moved.solver_kind(), SolverKind::kRiccati);
