@@ -22,6 +22,9 @@
 // BM_Update/<controller>_exact/…: with exact products (formulations.md §Exact products), N = 25, kmax = 10, n ≤ 16;
 // BM_Product/<controller>_exact/n:<n>/N:25 times one exact product with its residual;
 // BM_StageVectorOps/n:<n> times the vector work of one ID stage without its dynamics calls.
+// BM_Riccati/<fd|id>/n:<n>/N:<N>: one update of the Riccati solver (one real-time Gauss–Newton
+//   iteration: docs/solvers.md), replayed on the states of its own closed-loop swing-up as above,
+//   on Table 3's sizes and the horizon scaling (n ∈ {4,16}, N ∈ {10 … 100}).
 
 #include <chrono>
 #include <cmath>
@@ -38,6 +41,7 @@
 #include "idmpc/mujoco/closed_loop.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "idmpc/solver/controller.hpp"
+#include "idmpc/solver/riccati.hpp"
 
 namespace idmpc::bench {
 namespace {
@@ -313,6 +317,80 @@ void BM_StageVectorOps(benchmark::State& state, int n) {
       1e-9 * N, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
 }
 
+// the Riccati solver on one model and horizon: its swing-up, and a copy of its start to replay from
+struct RiccatiFixture {
+  std::tuple<int, int, int> key;
+  std::optional<RiccatiSolver> start, solver;
+  std::vector<double> t;
+  std::vector<VecX<double>> q, v;
+  size_t next = 0;
+  bool diverged = false;
+};
+
+RiccatiFixture& riccati_fixture(Formulation f, int n, int N) {
+  static std::unique_ptr<RiccatiFixture> current;  // one case at a time
+  const auto key = std::make_tuple(static_cast<int>(f), n, N);
+  if (current && current->key == key) return *current;
+  current = std::make_unique<RiccatiFixture>();
+  RiccatiFixture& fx = *current;
+  fx.key = key;
+  const BenchModel& bm = bench_model(n);
+  const ResolvedTask paper = paper_setup(n, 0.0, 10);
+  const VecX<double> v0 = VecX<double>::Zero(n);
+  const OcpProblem problem(bm.model(), f, DerivativeMode::kMatrix, paper.weights, paper.qref, N);
+  RiccatiSolver solver(problem, paper.cgmres.Tf, paper.cgmres.dt, RiccatiSettings{});
+  solver.initialize(0.0, paper.q0, v0);
+  fx.start.emplace(solver);
+  idmpc::Controller controller(std::make_unique<RiccatiSolver>(problem, paper.cgmres.Tf, paper.cgmres.dt,
+                                                               RiccatiSettings{}));
+  mj::Plant plant(bm.m.get(), bm.imported.actuation);
+  mj::ClosedLoopSettings loop;
+  loop.duration = kRecordSeconds;
+  loop.q0 = paper.q0;
+  loop.v0 = v0;
+  loop.phase_timing = false;
+  const mj::RunResult result = mj::run_closed_loop(plant, controller, loop, [&](const mj::StepRecord& r) {
+    fx.t.push_back(r.t);
+    fx.q.push_back(r.q);
+    fx.v.push_back(r.v);
+  });
+  const size_t ok = result.update_ms.size();
+  fx.t.resize(ok);
+  fx.q.resize(ok);
+  fx.v.resize(ok);
+  fx.diverged = result.diverged;
+  fx.solver = fx.start;
+  return fx;
+}
+
+void BM_Riccati(benchmark::State& state, Formulation f, int n, int N) {
+  RiccatiFixture& fx = riccati_fixture(f, n, N);
+  if (fx.t.empty()) {
+    state.SkipWithError("the swing-up diverged before its first update");
+    return;
+  }
+  long evaluations = 0;
+  for (auto _ : state) {
+    if (fx.next == fx.t.size()) {
+      fx.solver = fx.start;
+      fx.next = 0;
+    }
+    const size_t k = fx.next++;
+    const bool ok = fx.solver->update(fx.t[k], fx.q[k], fx.v[k]);
+    benchmark::DoNotOptimize(ok);
+    benchmark::DoNotOptimize(fx.solver->first_input().data());
+    evaluations += fx.solver->evaluations();
+  }
+  state.counters["n"] = n;
+  state.counters["N"] = N;
+  state.counters["diverged"] = fx.diverged ? 1 : 0;
+  state.counters["states"] = static_cast<double>(fx.t.size());
+  state.counters["evals"] = evaluations / static_cast<double>(state.iterations());
+  // per stage [us]
+  state.counters["us_per_stage"] = benchmark::Counter(
+      1e-6 * N, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
 void register_all() {
   // the union of the grids, in order, each case once
   std::vector<std::tuple<int, int, int>> cases;  // (n, N, kmax)
@@ -347,6 +425,19 @@ void register_all() {
                                      exact ? BM_Product : BM_Residual, c)
             ->Unit(benchmark::kMicrosecond);
       }
+    }
+  }
+  std::vector<std::pair<int, int>> riccati;  // (n, N)
+  for (int n : {4, 8, 16, 24, 32}) riccati.emplace_back(n, 25);
+  for (int n : {4, 16}) {
+    for (int N : {10, 15, 50, 75, 100}) riccati.emplace_back(n, N);
+  }
+  for (const auto& [n, N] : riccati) {
+    for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+      benchmark::RegisterBenchmark(
+          ("BM_Riccati/" + to_string(f) + "/n:" + std::to_string(n) + "/N:" + std::to_string(N)).c_str(), BM_Riccati,
+          f, n, N)
+          ->Unit(benchmark::kMicrosecond);
     }
   }
   for (int n : {4, 8, 16, 24, 32, 48, 64}) {

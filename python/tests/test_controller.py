@@ -264,3 +264,25 @@ def test_python_loop_is_the_command_line(formulation, tmp_path):
     updates, error = python_loop(idmpc.TaskRun(short_paper_task(formulation)))
     assert updates == cli["steps"]
     assert error == cli["final_q_error"]
+
+
+def test_the_riccati_solver_from_a_task_and_from_settings():
+    # the same task under the Riccati solver: its record names it, and the loop does not diverge
+    task = short_paper_task("fd")
+    task.solver = "riccati"
+    task.riccati.iterations = 2
+    s = idmpc.run_task(task)["summary"]
+    assert s["diverged"] is False
+    assert s["task"]["solver"] == "riccati" and s["task"]["riccati"]["iterations"] == 2
+    # a controller built by hand with the settings type
+    settings = idmpc.ControllerSettings()
+    settings.solver = "riccati"
+    assert settings.solver == "riccati"
+    settings.riccati.barrier = 1e-2
+    assert settings.riccati.barrier == 1e-2
+    with pytest.raises(ValueError, match="newton"):
+        settings.solver = "newton"
+    bad = idmpc.RiccatiSettings()
+    bad.iterations = 0
+    with pytest.raises(ValueError, match="iterations"):
+        bad.validate()

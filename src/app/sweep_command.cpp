@@ -36,6 +36,7 @@ struct SweepOptions {
   std::string derivatives = "matrix";  // matrix, adjoint or both
   std::string shooting = "single";     // single, multiple or both
   std::string products = "difference"; // difference, exact or both
+  std::string solver = "cgmres";       // cgmres, riccati or both
   double duration = 10.0;
   bool duration_given = false;  // arms: the task files' own durations unless --duration is given
   bool logs = false;
@@ -74,15 +75,18 @@ struct Cell {
   bool offset_free = false;  // offset-free tracking (the disturbance observer) on
   std::string products = "difference";  // how C/GMRES forms its products (formulations.md §Exact products)
   std::string latency = "none";         // compute latency (Task::latency)
+  std::string solver = "cgmres";        // the solver family (docs/solvers.md)
   // the resume key: every axis and setting the cell runs with. A cell's ID (--list-cells, --cell)
   // is its hash, so an axis added here reaches the cell runs with no other change.
   std::string key() const {
     return table + "|" + model + "|" + formulation + "|" + derivatives + "|" + shooting + "|" +
            (offset_free ? "offset-free" : "-") + "|" + std::to_string(N) + "|" + std::to_string(kmax) + "|" +
-           products + "|" + settings + (latency == "none" ? "" : "|latency " + latency);
+           products + "|" + settings + (latency == "none" ? "" : "|latency " + latency) +
+           (solver == "cgmres" ? "" : "|solver " + solver);
   }
   // the solver variant, as the tables label it
   std::string variant() const {
+    if (solver == "riccati") return "Riccati SQP-RTI";
     return derivatives + (shooting == "single" ? "" : ", " + shooting + " shooting") +
            (products == "difference" ? "" : ", " + products + " products");
   }
@@ -170,6 +174,7 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   task.shooting = c.shooting;
   task.products = c.products;
   task.latency = c.latency;
+  task.solver = c.solver;
   task.N = c.N;
   task.kmax = c.kmax;
   task.offset_free = c.offset_free;
@@ -314,21 +319,41 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     throw std::invalid_argument("--arms-tasks lists the tasks of --tables arms or tracking, got --tables " +
                                 opt.tables);
   }
+  std::vector<std::string> solvers;
+  if (opt.solver == "both") {
+    solvers = {"cgmres", "riccati"};
+  } else {
+    parse_solver(opt.solver);
+    solvers = {opt.solver};
+  }
+  // the solver variants: C/GMRES's derivative modes × shooting schemes × products, and the
+  // Riccati solver's one (its stage Jacobians are matrices, its shooting multiple)
+  struct Variant {
+    std::string solver, mode, shooting, product;
+  };
+  std::vector<Variant> variants;
+  for (const auto& solver : solvers) {
+    if (solver == "riccati") {
+      variants.push_back({solver, "matrix", "single", "difference"});
+      continue;
+    }
+    for (const auto& mode : modes) {
+      for (const auto& shooting : shootings) {
+        for (const auto& product : products) variants.push_back({solver, mode, shooting, product});
+      }
+    }
+  }
   std::vector<Cell> cells;
   if (task_table(opt.tables)) {
     std::vector<std::pair<std::string, Task>> tasks;
     for (const std::string& file : arm_tasks(opt)) tasks.emplace_back(file, checked_arm_task(opt, file));
-    for (const auto& mode : modes) {
-      for (const auto& shooting : shootings) {
-        for (const auto& product : products) {
-          for (const auto& [file, t] : tasks) {
-            for (const bool offset_free : offset_free_axis(opt, t)) {
-              for (const std::string& latency : opt.latency) {
-                for (const char* f : {"fd", "id"}) {
-                  cells.push_back(
-                      {opt.tables, file, f, mode, shooting, 0, t.N, t.kmax, "", offset_free, product, latency});
-                }
-              }
+    for (const Variant& v : variants) {
+      for (const auto& [file, t] : tasks) {
+        for (const bool offset_free : offset_free_axis(opt, t)) {
+          for (const std::string& latency : opt.latency) {
+            for (const char* f : {"fd", "id"}) {
+              cells.push_back({opt.tables, file, f, v.mode, v.shooting, 0, t.N, t.kmax, "", offset_free, v.product,
+                               latency, v.solver});
             }
           }
         }
@@ -341,16 +366,12 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     for (const std::string& model : g.runs) {
       const bool file = runs_task_file(kWorkPrecisionTable, model);
       const Task t = file ? load_task(in_models(opt, model)) : base;
-      for (const auto& mode : modes) {
-        for (const auto& shooting : shootings) {
-          for (const char* f : {"fd", "id"}) {
-            for (const auto& product : products) {
-              for (const int kmax : g.kmax) {
-                for (const std::string& latency : opt.latency) {
-                  cells.push_back({kWorkPrecisionTable, model, f, mode, shooting, 0, t.N, kmax, "", t.offset_free,
-                                   product, latency});
-                }
-              }
+      for (const Variant& v : variants) {
+        for (const char* f : {"fd", "id"}) {
+          for (const int kmax : g.kmax) {
+            for (const std::string& latency : opt.latency) {
+              cells.push_back({kWorkPrecisionTable, model, f, v.mode, v.shooting, 0, t.N, kmax, "", t.offset_free,
+                               v.product, latency, v.solver});
             }
           }
         }
@@ -358,16 +379,12 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
     }
     return cells;
   }
-  for (const auto& mode : modes) {
-    for (const auto& shooting : shootings) {
-      for (const auto& product : products) {
-        for (const PaperCell& p : tables.cells) {
-          if (opt.tables != "all" && p.table != opt.tables) continue;
-          for (const std::string& latency : opt.latency) {
-            cells.push_back({p.table, p.model, p.formulation, mode, shooting, p.n, p.N, p.kmax, "", base.offset_free,
-                             product, latency});
-          }
-        }
+  for (const Variant& v : variants) {
+    for (const PaperCell& p : tables.cells) {
+      if (opt.tables != "all" && p.table != opt.tables) continue;
+      for (const std::string& latency : opt.latency) {
+        cells.push_back({p.table, p.model, p.formulation, v.mode, v.shooting, p.n, p.N, p.kmax, "", base.offset_free,
+                         v.product, latency, v.solver});
       }
     }
   }
@@ -381,7 +398,7 @@ const std::vector<std::string> kCsvColumns = {
     "final_v_norm", "paper_ms", "paper_note", "steps", "saturated_steps", "max_constraint_violation",
     "contact_steps", "max_contact_force", "max_final_disturbance", "position_rms", "position_max",
     "orientation_rms", "orientation_max", "tracking_tolerance", "products", "mean_residual", "closed_loop_cost",
-    "latency", "updates", "deadline_misses", "max_update_ms", "joint_error_rms", "settings"};
+    "latency", "updates", "deadline_misses", "max_update_ms", "joint_error_rms", "solver", "settings"};
 
 std::string csv_header() {
   std::string h;
@@ -443,6 +460,7 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
   set("deadline_misses", r.deadline_misses);
   set("max_update_ms", r.max_ms);
   set("joint_error_rms", r.joint_error_rms);
+  set("solver", r.cell.solver);
   set("settings", r.cell.settings);
   std::string row;
   for (const std::string& x : f) row += (row.empty() ? "" : ",") + x;
@@ -483,7 +501,7 @@ std::map<std::string, CellResult> read_finished(const std::string& path, const s
       CellResult r;
       r.cell = {at("table"), at("model"), at("formulation"), at("derivatives"), at("shooting"), std::stoi(at("n")),
                 std::stoi(at("N")), std::stoi(at("kmax")), at("settings"), at("offset_free") == "1", at("products"),
-                at("latency")};
+                at("latency"), at("solver")};
       r.Qa = std::stod(at("Qa"));
       r.diverged = at("diverged") == "1";
       r.diverged_at = std::stod(at("diverged_at"));
@@ -1376,6 +1394,11 @@ void register_sweep(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--derivatives", opt->derivatives, "matrix, adjoint or both")->capture_default_str();
   sub->add_option("--shooting", opt->shooting, "single, multiple or both (docs/multiple_shooting.md)")->capture_default_str();
+  sub->add_option("--solver", opt->solver,
+                  "cgmres (the paper's), riccati (Gauss-Newton SQP, one real-time iteration per update) or both "
+                  "(docs/solvers.md); the Riccati cells have one variant whatever --derivatives, --shooting and "
+                  "--products say")
+      ->capture_default_str();
   sub->add_option("--products", opt->products,
                   "difference (the paper's forward differences), exact (dual numbers) or both (docs/exact_products.md)")
       ->capture_default_str();

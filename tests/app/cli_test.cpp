@@ -324,6 +324,8 @@ const std::vector<BadInput>& bad_inputs() {
   static const std::vector<BadInput> inputs = {
       {"--formulation xyz", {"formulation", "'xyz'"}},
       {"--derivatives exact", {"derivative", "'exact'"}},
+      {"--solver newton", {"--solver", "'newton'"}},
+      {"--solver riccati --iterations 0", {"riccati", "iterations", "0"}},
       {"--N 0", {"N", "0"}},
       {"--kmax 0", {"kmax", "0"}},
       {"--dt 0", {"dt", "0"}},
@@ -376,6 +378,30 @@ TEST_F(Cli, SwingupRefusesAnUnwritableSummaryBeforeRunning) {
   EXPECT_EQ(r.out, "");
   EXPECT_FALSE(fs::exists(dir_ / "log.csv"));
   expect_no_temporaries();
+}
+
+// the Riccati solver runs the same task through the same command: its record names it and says
+// what it did
+TEST_F(Cli, SwingupWithTheRiccatiSolver) {
+  const Result r = idmpc("swingup " + quote(kArm4) +
+                         " --solver riccati --iterations 2 --duration 0.2 --log log.csv --summary summary.json");
+  ASSERT_EQ(r.code, 2) << r.err;
+  EXPECT_NE(r.out.find("Riccati (ID)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("iterations = 2"), std::string::npos) << r.out;
+  const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "summary.json"));
+  EXPECT_EQ(s["task"]["solver"], "riccati");
+  EXPECT_EQ(s["task"]["riccati"]["iterations"], 2);
+  EXPECT_EQ(s["diverged"], false);
+  EXPECT_EQ(lines_of(slurp(dir_ / "log.csv")).size(), 201u);
+  // the same from a task file; a bad field there is named
+  write("riccati.json", "{\"schema\": \"idmpc-task/1\", \"model\": \"" + kArm4 +
+                            "\", \"solver\": \"riccati\", \"riccati\": {\"barrier\": 1e-2}}");
+  const Result file = idmpc("swingup --task riccati.json --duration 0.1 --summary file.json");
+  EXPECT_NE(file.code, 1) << file.err;
+  EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "file.json"))["task"]["riccati"]["barrier"], 1e-2);
+  write("bad.json", "{\"schema\": \"idmpc-task/1\", \"model\": \"" + kArm4 +
+                        "\", \"solver\": \"riccati\", \"riccati\": {\"barrier\": -1}}");
+  expect_error(idmpc("swingup --task bad.json --duration 0.1"), {"barrier", "-1"});
 }
 
 TEST_F(Cli, SwingupWritesLogAndSummary) {

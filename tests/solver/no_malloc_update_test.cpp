@@ -13,6 +13,7 @@
 #include "idmpc/ocp/trajectory.hpp"
 #include "idmpc/solver/cgmres.hpp"
 #include "idmpc/solver/controller.hpp"
+#include "idmpc/solver/riccati.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 #include "support/count_allocations.hpp"
@@ -133,6 +134,41 @@ TEST(NoMallocController, UpdatesWithTheObserverDoNotAllocate) {
     }
     EXPECT_EQ(allocations, 0);
     EXPECT_TRUE((controller.disturbance().array() != 0).any()) << "the observer must have run";
+  }
+}
+
+// the Riccati solver's update (local models, recursion, step) allocates nothing either, in both
+// formulations, with torque limits, a frame target and a moving joint target
+TEST(NoMallocRiccati, UpdatesDoNotAllocate) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const double inf = std::numeric_limits<double>::infinity();
+  const TorqueLimits limits{(VecX<double>(4) << -20, -inf, -20, -inf).finished(),
+                            (VecX<double>(4) << 20, inf, 20, inf).finished()};
+  const VecX<double> q = (VecX<double>(4) << -1.5, 0.25, 0.27, -0.23).finished();
+  const VecX<double> v = (VecX<double>(4) << 2.0, -1.0, 0.5, 0.3).finished();
+  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    SCOPED_TRACE(to_string(f));
+    OcpProblem problem(p.model, f, DerivativeMode::kMatrix, paper_weights(4), VecX<double>::Zero(4), 25, limits);
+    FrameTarget target;
+    target.frame = Frame{"link3 tip", 3, Transform<double>{}};
+    target.frame.placement.r = Vec3<double>(0, 0, 0.5);
+    target.position_weight.setConstant(10);
+    target.orientation_weight = 1;
+    problem.set_frame_target(target);
+    MatX<double> waypoints(4, 2);
+    waypoints << q, VecX<double>::Zero(4);
+    problem.set_joint_trajectory(std::make_shared<const WaypointTrajectory>(std::vector<double>{0.5, 1.5}, waypoints));
+    RiccatiSettings rs;
+    rs.iterations = 2;
+    rs.line_search = true;  // the merit's evaluations too
+    RiccatiSolver solver(problem, 0.5, 1e-3, rs);
+    solver.initialize(0.5, q, v);
+    ASSERT_TRUE(solver.update(0.501, q, v)) << solver.failure();
+    CountAllocations c;
+    for (int k = 2; k <= 4; ++k) {
+      if (!solver.update(0.5 + k * 1e-3, q, v)) ADD_FAILURE() << solver.failure();
+    }
+    EXPECT_EQ(c.count(), 0);
   }
 }
 

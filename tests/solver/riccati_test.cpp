@@ -127,6 +127,30 @@ TEST_P(RiccatiSolution, TorqueLimitsHoldAndBind) {
   EXPECT_GT(std::abs(T(0, 0)), 0.99 * limit);
 }
 
+// The barrier is recentred at the torque reference: a target held within limits that are far
+// from symmetric about its holding torque is a solution, at rest on the target with the holding
+// torque (an uncentred barrier would pull it off by its slope there)
+TEST_P(RiccatiSolution, LimitsMoveNoTargetHeldWithinThem) {
+  const Formulation f = GetParam();
+  const test::Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const int n = p.model.n;
+  VecX<double> q_ref = VecX<double>::Zero(n);
+  q_ref[0] = 0.6;
+  OcpProblem probe(p.model, f, DerivativeMode::kMatrix, paper_weights(n), q_ref, kN);
+  const VecX<double> hold = probe.terms().u_ref(0);
+  // each torque range reaches 5 N m past the holding torque on one side, 60 N m on the other
+  TorqueLimits limits{hold - VecX<double>::Constant(n, 5.0), hold + VecX<double>::Constant(n, 60.0)};
+  OcpProblem problem(p.model, f, DerivativeMode::kMatrix, paper_weights(n), q_ref, kN, limits);
+  RiccatiSolver solver(problem, kTf, 1e-3, converged());
+  solver.initialize(0.0, q_ref, VecX<double>::Zero(n));
+  for (int i = 0; i <= kN; ++i) {
+    EXPECT_LT((solver.states().col(i).head(n) - q_ref).cwiseAbs().maxCoeff(), 1e-9) << "stage " << i;
+  }
+  for (int i = 0; i < kN; ++i) {
+    EXPECT_LT((solver.torques().col(i) - hold).cwiseAbs().maxCoeff(), 1e-7) << "stage " << i;
+  }
+}
+
 TEST(RiccatiSettingsCheck, BadSettingsAreRefusedByName) {
   RiccatiSettings s;
   s.iterations = 0;

@@ -190,7 +190,7 @@ void StageTerms::update_frame_references() {
 
 double StageTerms::stage_cost(int i, In q, In v, In u) const {
   const OcpWeights& w = cost_.weights();
-  auto quadratic = [](const auto& e, const VecX<double>& W) { return 0.5 * e.dot(W.cwiseProduct(e)); };
+  auto quadratic = [](const auto& e, const auto& W) { return 0.5 * e.dot(W.cwiseProduct(e)); };  // W: VecX or Vec3, no copy
   double L = quadratic(q - q_ref_.col(i), w.Qq) + quadratic(v - v_ref_.col(i), w.Qv) +
              quadratic(u - u_ref_.col(i), w.R);
   if (!frame_) return L;
@@ -243,6 +243,7 @@ StageTerms::FrameWorkspace StageTerms::make_frame_workspace() const {
   if (frame_) {
     ws.kinematics.emplace(*model_, frame_->frame);
     ws.jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
+    ws.weighted = Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, n());
   }
   return ws;
 }
@@ -260,7 +261,8 @@ void StageTerms::state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H
   fk.jacobian(ws.jacobian);
   const auto Jp = ws.jacobian.topRows<3>();
   const auto Jw = ws.jacobian.bottomRows<3>();
-  H_qq.noalias() += Jp.transpose() * frame_->position_weight.asDiagonal() * Jp;
+  ws.weighted.noalias() = frame_->position_weight.asDiagonal() * Jp;
+  H_qq.noalias() += Jp.transpose() * ws.weighted;
   if (frame_->orientation_weight > 0) {
     // w_o(1 − cos θ) = w_o(1 − (tr E − 1)/2) with E = R R_refᵀ; turning the frame by exp([δ]×)
     // gives tr(exp([δ]×)E), whose second-order term is ½δᵀ(E_sym − tr(E) I)δ
@@ -270,7 +272,8 @@ void StageTerms::state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H
     Eigen::SelfAdjointEigenSolver<Mat3<double>> eig(H);
     const Mat3<double> H_psd =
         eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
-    H_qq.noalias() += Jw.transpose() * H_psd * Jw;
+    ws.weighted.noalias() = H_psd * Jw;
+    H_qq.noalias() += Jw.transpose() * ws.weighted;
   }
 }
 

@@ -123,6 +123,7 @@ class StageTerms {
   struct FrameWorkspace {
     std::optional<FrameKinematics<double>> kinematics;
     Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian;
+    Eigen::Matrix<double, 3, Eigen::Dynamic> weighted;  ///< a weight times a 3 × n block of the Jacobian
   };
   FrameWorkspace make_frame_workspace() const;
 

@@ -199,7 +199,7 @@ const VecX<double>& Controller::initialize(In q, In v) {
     return tau_;
   }
   // the state is measured now and the torque applies now: no prediction (Δt = 0)
-  const auto a0 = solver_->first_input();
+  const Vec& a0 = solver_->first_input();
   torque_rule(q, v, a0, 0.0);
   if (problem().formulation() == Formulation::kInverseDynamics) a0_hat_ = a0;
   if (!tau_cmd_.allFinite()) {
@@ -264,7 +264,7 @@ bool Controller::aim(double delay) {
 }
 
 void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
-  const auto U0 = solver_->first_input();
+  const Vec& U0 = solver_->first_input();
   if (problem().formulation() == Formulation::kForwardDynamics) {
     tau_cmd_ = U0;
   } else {

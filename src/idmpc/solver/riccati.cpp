@@ -63,7 +63,7 @@ RiccatiSolver::RiccatiSolver(OcpProblem problem, double Tf, double dt, const Ric
   if (!(Tf > 0) || !std::isfinite(Tf)) throw std::invalid_argument("horizon length Tf must be positive, got " + text(Tf));
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("sampling period dt must be positive, got " + text(dt));
   const int n = this->n(), N = this->N(), nx = 2 * n;
-  model_ = problem_.make_local_model();
+  model_ = detail::LocalModelHolder(problem_.make_local_model());
   stage_.assign(static_cast<size_t>(N), StageLocal(n));
   terminal_ = TerminalLocal(n);
   const TorqueBounds& b = problem_.torque_bounds();
@@ -135,9 +135,11 @@ void RiccatiSolver::linearize(double t) {
   lmd_ = terminal_.l_x;
   for (int i = N - 1; i >= 0; --i) {
     const StageLocal& st = stage_[static_cast<size_t>(i)];
-    Fi_.noalias() = st.l_u + st.B.transpose() * lmd_;
+    Fi_ = st.l_u;
+    Fi_.noalias() += st.B.transpose() * lmd_;
     sum += Fi_.squaredNorm() / (h * h);
-    lmd_next_.noalias() = st.l_x + st.A.transpose() * lmd_;
+    lmd_next_ = st.l_x;
+    lmd_next_.noalias() += st.A.transpose() * lmd_;
     lmd_.swap(lmd_next_);
   }
   kkt_ = std::sqrt(sum);
@@ -198,13 +200,20 @@ bool RiccatiSolver::backward(double eps) {
     Eigen::LLT<MatX<double>>& llt = llt_[static_cast<size_t>(i)];
     llt.compute(Quu_);
     if (llt.info() != Eigen::Success) return false;
+    // K = −Q_uu⁻¹Q_ux, k = −Q_uu⁻¹q_u, in place (no temporaries: an update allocates nothing)
     MatX<double>& K = K_[static_cast<size_t>(i)];
-    K = -llt.solve(Qux_);
-    k_.col(i) = -llt.solve(qu_);
+    K = Qux_;
+    llt.solveInPlace(K);
+    K *= -1;
+    llt.solveInPlace(qu_);
+    k_.col(i) = -qu_;
     MatX<double>& Pi = P_[static_cast<size_t>(i)];
     Pi = Qxx_;
     Pi.noalias() += Qux_.transpose() * K;
-    Pi = 0.5 * (Pi + Pi.transpose()).eval();
+    // symmetric up to rounding: its lower triangle mirrored
+    for (Eigen::Index c = 1; c < Pi.cols(); ++c) {
+      for (Eigen::Index r = 0; r < c; ++r) Pi(r, c) = Pi(c, r);
+    }
     p_.col(i) = qx_;
     p_.col(i).noalias() += Qux_.transpose() * k_.col(i);
   }

@@ -47,6 +47,27 @@ struct RiccatiSettings {
   void validate() const;
 };
 
+namespace detail {
+/// @brief A LocalModel owned by value: copies clone it (so the solver copies as a whole).
+class LocalModelHolder {
+ public:
+  LocalModelHolder() = default;
+  explicit LocalModelHolder(std::unique_ptr<LocalModel> m) : p_(std::move(m)) {}
+  LocalModelHolder(const LocalModelHolder& o) : p_(o.p_ ? o.p_->clone() : nullptr) {}
+  LocalModelHolder& operator=(const LocalModelHolder& o) {
+    if (this != &o) p_ = o.p_ ? o.p_->clone() : nullptr;
+    return *this;
+  }
+  LocalModelHolder(LocalModelHolder&&) noexcept = default;
+  LocalModelHolder& operator=(LocalModelHolder&&) noexcept = default;
+  LocalModel* operator->() const { return p_.get(); }
+
+ private:
+  std::unique_ptr<LocalModel> p_;
+};
+}  // namespace detail
+
+/// A solver copies with its problem, trajectory and workspaces (a warm start to replay from).
 class RiccatiSolver final : public MpcSolver {
  public:
   /// @param problem the horizon's problem (its N stages; owned).
@@ -112,7 +133,7 @@ class RiccatiSolver final : public MpcSolver {
   OcpProblem problem_;
   RiccatiSettings settings_;
   double Tf_, dt_;
-  std::unique_ptr<LocalModel> model_;
+  detail::LocalModelHolder model_;
   std::vector<StageLocal> stage_;
   TerminalLocal terminal_;
   // bounded joints: joint index, lower and upper torque, barrier weight μ per stage
