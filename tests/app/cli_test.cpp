@@ -324,8 +324,6 @@ const std::vector<BadInput>& bad_inputs() {
   static const std::vector<BadInput> inputs = {
       {"--formulation xyz", {"formulation", "'xyz'"}},
       {"--derivatives exact", {"derivative", "'exact'"}},
-      {"--solver newton", {"--solver", "'newton'"}},
-      {"--solver riccati --iterations 0", {"riccati", "iterations", "0"}},
       {"--N 0", {"N", "0"}},
       {"--kmax 0", {"kmax", "0"}},
       {"--dt 0", {"dt", "0"}},
@@ -340,7 +338,9 @@ const std::vector<BadInput>& bad_inputs() {
       {"--formulation fd --R 0", {"--R", "positive with FD"}},
       {"--R 0", {"--R and --Qa", "both 0"}},
       {"--shooting double", {"shooting", "'double'", "single", "multiple"}},
-      {"--products finite", {"--products (cgmres.products)", "'finite'", "difference", "exact"}}};
+      {"--products finite", {"--products (cgmres.products)", "'finite'", "difference", "exact"}},
+      {"--solver newton", {"--solver", "'newton'"}},
+      {"--solver riccati --iterations 0", {"riccati", "iterations", "0"}}};
   return inputs;
 }
 
@@ -348,7 +348,8 @@ std::string bad_input_name(const ::testing::TestParamInfo<BadInput>& info) {
   static const std::vector<std::string> names = {"formulation", "derivatives", "N",  "kmax",      "dt",
                                                  "Qq",          "R",           "q0", "ball_joint",
                                                  "kmax_int_max", "kmax_above_dimension", "fd_R_zero",
-                                                 "id_R_and_Qa_zero", "shooting", "products"};
+                                                 "id_R_and_Qa_zero", "shooting", "products", "solver",
+                                                 "riccati_iterations"};
   return names.at(info.index);
 }
 
@@ -395,12 +396,12 @@ TEST_F(Cli, SwingupWithTheRiccatiSolver) {
   EXPECT_EQ(lines_of(slurp(dir_ / "log.csv")).size(), 201u);
   // the same from a task file; a bad field there is named
   write("riccati.json", "{\"schema\": \"idmpc-task/1\", \"model\": \"" + kArm4 +
-                            "\", \"solver\": \"riccati\", \"riccati\": {\"barrier\": 1e-2}}");
+                            "\", \"q0\": \"swingup\", \"qref\": 0, \"solver\": \"riccati\", \"riccati\": {\"barrier\": 1e-2}}");
   const Result file = idmpc("swingup --task riccati.json --duration 0.1 --summary file.json");
   EXPECT_NE(file.code, 1) << file.err;
   EXPECT_EQ(nlohmann::json::parse(slurp(dir_ / "file.json"))["task"]["riccati"]["barrier"], 1e-2);
   write("bad.json", "{\"schema\": \"idmpc-task/1\", \"model\": \"" + kArm4 +
-                        "\", \"solver\": \"riccati\", \"riccati\": {\"barrier\": -1}}");
+                        "\", \"q0\": \"swingup\", \"qref\": 0, \"solver\": \"riccati\", \"riccati\": {\"barrier\": -1}}");
   expect_error(idmpc("swingup --task bad.json --duration 0.1"), {"barrier", "-1"});
 }
 
