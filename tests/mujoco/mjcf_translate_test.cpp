@@ -141,7 +141,7 @@ TEST_F(MjcfTranslate, Fr3GetsMujoco3ServoGainsRangesAndForceLimits) {
   expect_fr3_translated(loaded);
   // one notice line per translation
   EXPECT_EQ(loaded.translations.size(), 12u) << joined(loaded.translations);
-  expect_one_notice(loaded, "<compiler autolimits> set to true");
+  expect_one_notice(loaded, "<compiler autolimits> set to true, MuJoCo >= 3.0.0's default (earlier versions' is false)");
   expect_one_notice(loaded, "integrator implicitfast replaced by implicit");
   expect_one_notice(loaded, "keyframe qpos trimmed");
   expect_one_notice(loaded, "actuator 'fr3_joint1' (<position> 'fr3_joint1', line 50): kv 450 gives biasprm[2] = -450");
