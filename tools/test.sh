@@ -1,14 +1,37 @@
 #!/usr/bin/env bash
-# The README's test command: installs dependencies, builds from scratch in Release, runs ctest,
+# The README's test command: installs dependencies, builds in Release with warnings as errors,
+# runs the fast tier of the tests (ctest -LE acceptance, the Python module's pytest included),
 # then installs to a temporary prefix and uses the install from outside the sources.
+#
+#   tools/test.sh                 # the fast tier and the install checks
+#   tools/test.sh --acceptance    # the acceptance tier only (ctest -L acceptance: the long
+#                                 # closed-loop runs), in the same build directory, built if needed
+#
+# Extra arguments after the mode go to ctest (e.g. -R tracking).
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-"$here/tools/setup.sh"
+tier=fast
+if [ "${1:-}" = "--acceptance" ]; then
+  tier=acceptance
+  shift
+fi
 export IDMPC_BUILD_DIR=${IDMPC_BUILD_DIR:-$here/build}
+if [ "$tier" = acceptance ]; then
+  # reuses the build the fast tier made (an incremental build: nothing to do when it is current)
+  IDMPC_CMAKE_ARGS="-DIDMPC_WERROR=ON ${IDMPC_CMAKE_ARGS:-}" "$here/tools/build.sh"
+  cd "$IDMPC_BUILD_DIR"
+  started=$SECONDS
+  ctest --output-on-failure -j "$(nproc)" -L acceptance "$@"
+  echo "idmpc test: the acceptance tier passed in $((SECONDS - started)) s"
+  exit 0
+fi
+"$here/tools/setup.sh"
 IDMPC_CMAKE_ARGS="-DIDMPC_WERROR=ON ${IDMPC_CMAKE_ARGS:-}" "$here/tools/build.sh"
 cd "$IDMPC_BUILD_DIR"
 build=$(pwd)
-ctest --output-on-failure -j "$(nproc)"
+started=$SECONDS
+ctest --output-on-failure -j "$(nproc)" -LE acceptance "$@"
+echo "idmpc test: the fast tier passed in $((SECONDS - started)) s"
 
 # the install: no source or build path inside, find_package(idmpc) from a program of its own
 # (examples/cpp), and the installed idmpc finding its data from any directory

@@ -212,6 +212,12 @@ TEST_P(KinematicsTest, PlacementAndJacobianMatchMujoco) {
       FrameKinematics<double> fk(*model_, frame);
       fk.compute(*model_, q);
       fk.jacobian(J);
+      // the pose without a workspace (frame_pose) is the workspace's, up to the order of products
+      Vec3<double> p;
+      Mat3<double> R;
+      frame_pose(*model_, frame, q, p, R);
+      EXPECT_LE((p - fk.position()).cwiseAbs().maxCoeff(), 1e-12 * (1 + p.norm()));
+      EXPECT_LE((R - fk.rotation()).cwiseAbs().maxCoeff(), 1e-12);
       const mjtNum* xpos = t.site >= 0 ? d->site_xpos + 3 * t.site : d->xpos + 3 * t.body;
       const mjtNum* xmat = t.site >= 0 ? d->site_xmat + 9 * t.site : d->xmat + 9 * t.body;
       std::vector<mjtNum> jp(3 * n()), jr(3 * n());

@@ -141,7 +141,7 @@ TEST_F(MjcfTranslate, Fr3GetsMujoco3ServoGainsRangesAndForceLimits) {
   expect_fr3_translated(loaded);
   // one notice line per translation
   EXPECT_EQ(loaded.translations.size(), 12u) << joined(loaded.translations);
-  expect_one_notice(loaded, "<compiler autolimits> set to true");
+  expect_one_notice(loaded, "<compiler autolimits> set to true, MuJoCo >= 3.0.0's default (earlier versions' is false)");
   expect_one_notice(loaded, "integrator implicitfast replaced by implicit");
   expect_one_notice(loaded, "keyframe qpos trimmed");
   expect_one_notice(loaded, "actuator 'fr3_joint1' (<position> 'fr3_joint1', line 50): kv 450 gives biasprm[2] = -450");
@@ -256,6 +256,40 @@ TEST_F(MjcfTranslate, ActuatorForceRangeOfAJointWithoutActuatorIsKeptForTheCalle
   const mj::ImportedModel imported = mj::import_model(loaded.model.get(), path, options);
   EXPECT_EQ(imported.actuation.torque_lower, (VecX<double>(2) << -3, -1).finished());
   EXPECT_EQ(imported.actuation.torque_upper, (VecX<double>(2) << 4, 2).finished());
+}
+
+// MuJoCo's class rule for an element without its own class: the childclass of the nearest
+// enclosing body that has one, not of an outer body; an element's own class wins over any
+TEST_F(MjcfTranslate, ChildclassIsTheNearestEnclosingBodys) {
+  const std::string path = write("nested.xml", R"(<mujoco>
+  <default>
+    <default class="outer"><joint actuatorfrcrange="-3 4"/></default>
+    <default class="inner"><joint actuatorfrcrange="-1 2"/></default>
+  </default>
+  <worldbody>
+    <body name="upper" pos="0 0 1" childclass="outer">
+      <joint name="shoulder" axis="0 1 0"/>
+      <geom type="sphere" size="0.1" mass="1" contype="0" conaffinity="0"/>
+      <body name="fore" pos="0.3 0 0" childclass="inner">
+        <joint name="elbow" axis="0 1 0"/>
+        <geom type="sphere" size="0.1" mass="1" contype="0" conaffinity="0"/>
+        <body name="hand" pos="0.3 0 0">
+          <joint name="wrist" axis="0 1 0"/>
+          <geom type="sphere" size="0.1" mass="1" contype="0" conaffinity="0"/>
+          <body name="finger" pos="0.1 0 0">
+            <joint name="knuckle" axis="0 1 0" class="outer"/>
+            <geom type="sphere" size="0.05" mass="0.1" contype="0" conaffinity="0"/>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)");
+  const mj::LoadedModel loaded = mj::load_model_translated(path);
+  // shoulder: its body's class; elbow: its own body's, nearer than the outer one; wrist: the
+  // nearest enclosing body with a childclass (fore), not upper; knuckle: its own class
+  EXPECT_EQ(loaded.joint_force_lower, (std::vector<double>{-3, -1, -1, -3}));
+  EXPECT_EQ(loaded.joint_force_upper, (std::vector<double>{4, 2, 2, 4}));
 }
 
 TEST_F(MjcfTranslate, WhatCannotBeTranslatedIsListedAllAtOnceInOneLine) {

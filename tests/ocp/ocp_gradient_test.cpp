@@ -12,6 +12,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -612,7 +613,8 @@ TEST(StageCost, GradientsOfTheValueAreTheStageGradientsAndTheTargetCostsNothing)
 
   const VecX<double> q = random_vector(rng, n, 1.0), v = random_vector(rng, n, 1.0), u = random_vector(rng, n, 5.0);
   VecX<double> L_q(n), L_v(n);
-  terms.state_gradient(1, q, v, L_q, L_v);
+  StageTerms::FrameScratch<double> scratch;
+  terms.state_gradient(1, q, v, L_q, L_v, scratch);
   const VecX<double> L_u = w.R.cwiseProduct(u - terms.u_ref(1));
   auto gradient = [&](int which) {
     VecX<double> g(n);
@@ -628,6 +630,106 @@ TEST(StageCost, GradientsOfTheValueAreTheStageGradientsAndTheTargetCostsNothing)
   EXPECT_LE((gradient(0) - L_q).norm(), 1e-7 * (1 + L_q.norm()));
   EXPECT_LE((gradient(1) - L_v).norm(), 1e-7 * (1 + L_v.norm()));
   EXPECT_LE((gradient(2) - L_u).norm(), 1e-7 * (1 + L_u.norm()));
+}
+
+// a panda problem whose joint target and frame target both move (waypoints), d̂ set
+StageTerms moving_panda_terms(const Problem& p, int N) {
+  const int n = p.model.n;
+  std::mt19937 rng(6);
+  const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2), VecX<double>::Zero(n),
+                     random_vector(rng, n, 1e-3, 1e-2)};
+  StageTerms terms(std::make_shared<const Model>(p.model), QuadraticCost(w, random_vector(rng, n, 1.0), n),
+                   TorqueLimits{}, N, false);
+  FrameTarget target;
+  target.frame = Frame{"flange", n - 1, Transform<double>{}};
+  target.position_weight = random_vector(rng, 3, 2.0, 8.0);
+  target.orientation_weight = 3.0;
+  target.position = Vec3<double>(0.4, 0.1, 0.5);
+  terms.set_frame_target(target);
+  MatX<double> joints(n, 3), points(3, 3);
+  for (int k = 0; k < 3; ++k) {
+    joints.col(k) = random_vector(rng, n, 1.0);
+    points.col(k) = Vec3<double>(0.4, 0.1, 0.5) + random_vector(rng, 3, 0.1);
+  }
+  terms.set_joint_trajectory(std::make_shared<WaypointTrajectory>(std::vector<double>{0.0, 0.3, 0.7}, joints));
+  terms.set_frame_trajectory(std::make_shared<WaypointTrajectory>(std::vector<double>{0.0, 0.4, 0.8}, points));
+  terms.set_disturbance(random_vector(rng, n, 2.0));
+  return terms;
+}
+
+// stage_cost_at(t) is stage i's cost when stage i's time is t, whatever stage times were set
+// last; and at another time it differs (the references move)
+TEST(StageCost, AtATimeIsTheStageCostOfThatTime) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/panda.xml");
+  const int n = p.model.n;
+  StageTerms terms = moving_panda_terms(p, 4);
+  std::mt19937 rng(8);
+  const VecX<double> q = random_vector(rng, n, 1.0), v = random_vector(rng, n, 1.0), u = random_vector(rng, n, 5.0);
+  StageTerms::CostScratch scratch = terms.cost_scratch();
+  const double t0 = 0.13, dtau = 0.05;
+  terms.set_stage_times(t0, dtau);
+  std::vector<double> at_stage;
+  for (int i = 0; i <= 4; ++i) at_stage.push_back(terms.stage_cost(i, q, v, u));
+  terms.set_stage_times(0.61, 0.02);  // elsewhere: stage_cost_at must not depend on it
+  for (int i = 0; i <= 4; ++i) {
+    const double t = t0 + i * dtau;
+    EXPECT_NEAR(terms.stage_cost_at(t, q, v, u, scratch), at_stage[static_cast<size_t>(i)],
+                1e-12 * at_stage[static_cast<size_t>(i)])
+        << "t = " << t;
+    EXPECT_GT(std::abs(terms.stage_cost(i, q, v, u) - at_stage[static_cast<size_t>(i)]),
+              1e-6 * at_stage[static_cast<size_t>(i)]);
+  }
+}
+
+// The const stage functions share no scratch: two threads evaluating one problem's state
+// gradients (with the frame's Jᵀf) and costs at different states, each in its own
+// workspace, get what one thread gets alone
+TEST(StageTermsThreads, ConstFunctionsOfOneProblemRunConcurrently) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/panda.xml");
+  const int n = p.model.n;
+  const StageTerms terms = moving_panda_terms(p, 4);
+  constexpr int kStates = 64, kRounds = 300;
+  std::mt19937 rng(9);
+  std::vector<VecX<double>> qs, vs;
+  for (int k = 0; k < kStates; ++k) {
+    qs.push_back(random_vector(rng, n, 2.0));
+    vs.push_back(random_vector(rng, n, 1.0));
+  }
+  struct Out {
+    std::vector<VecX<double>> L_q;
+    std::vector<double> cost;
+  };
+  auto evaluate = [&](int first) {
+    Out out;
+    StageTerms::FrameScratch<double> scratch;
+    VecX<double> L_q(n), L_v(n);
+    for (int r = 0; r < kRounds; ++r) {
+      for (int j = 0; j < kStates; ++j) {
+        const int k = (first + j) % kStates;
+        terms.state_gradient(2, qs[static_cast<size_t>(k)], vs[static_cast<size_t>(k)], L_q, L_v, scratch);
+        const double c = terms.stage_cost(2, qs[static_cast<size_t>(k)], vs[static_cast<size_t>(k)], L_v);
+        if (r == 0) {
+          out.L_q.push_back(L_q);
+          out.cost.push_back(c);
+        } else if (out.L_q[static_cast<size_t>(j)] != L_q || out.cost[static_cast<size_t>(j)] != c) {
+          out.cost[static_cast<size_t>(j)] = std::numeric_limits<double>::quiet_NaN();
+        }
+      }
+    }
+    return out;
+  };
+  const Out alone = evaluate(0);
+  Out a, b;
+  std::thread other([&] { b = evaluate(kStates / 2); });
+  a = evaluate(0);
+  other.join();
+  for (int j = 0; j < kStates; ++j) {
+    const size_t k = static_cast<size_t>(j), kb = static_cast<size_t>((j + kStates / 2) % kStates);
+    EXPECT_EQ(a.L_q[k], alone.L_q[k]) << "state " << j;
+    EXPECT_EQ(a.cost[k], alone.cost[k]) << "state " << j;
+    EXPECT_EQ(b.L_q[k], alone.L_q[kb]) << "state " << j << " (second thread)";
+    EXPECT_EQ(b.cost[k], alone.cost[kb]) << "state " << j << " (second thread)";
+  }
 }
 
 TEST(OcpDisturbance, RefusesWrongSizeAndNonFiniteValues) {

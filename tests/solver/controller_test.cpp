@@ -90,6 +90,22 @@ TEST_P(ControllerRule, TorqueIsEqs27And28) {
       EXPECT_LE(rel(controller.applied_acceleration(), U0), 0.0);
     }
     EXPECT_LE(rel(controller.torque(), expected), kSameTorque);
+    if (k >= 20) {
+      // aimed at a delay other than Δt, the rule predicts over that delay (FD: u_0 unchanged);
+      // aimed at Δt again, it gives the update's own torque back
+      const double delay = 2.5 * dt;
+      ASSERT_TRUE(controller.aim(delay)) << controller.failure();
+      const VecX<double> aimed =
+          c.formulation == Formulation::kForwardDynamics
+              ? U0
+              : VecX<double>(rnea(model, data, VecX<double>(q + delay * v), VecX<double>(v + delay * a0_previous), U0));
+      EXPECT_LE(rel(controller.torque(), aimed), kSameTorque) << "aim(" << delay << ")";
+      if (c.formulation == Formulation::kInverseDynamics) {
+        EXPECT_GT(rel(aimed, expected), 1e3 * kSameTorque) << "the delay must move the ID torque in this test";
+      }
+      ASSERT_TRUE(controller.aim(dt));
+      EXPECT_LE(rel(controller.torque(), expected), kSameTorque) << "aim(dt)";
+    }
     a0_previous = U0;
   }
 }
@@ -355,6 +371,70 @@ INSTANTIATE_TEST_SUITE_P(Controllers, DisturbanceObserver,
                          [](const auto& info) {
                            return to_string(info.param.formulation) + "_" + to_string(info.param.mode);
                          });
+
+// The observer's step over a measured interval (the latency loop's update(t, q, v, interval,
+// τ̄)): β = min(1, interval/T_obs) and the acceleration (v − v⁻)/interval, whatever the control
+// period. The first update after initialize only records its measurement.
+TEST(DisturbanceObserverStep, WeighsTheInnovationByTheMeasuredInterval) {
+  const test::Problem p = load_problem(kArm4);
+  const Model& model = p.model;
+  const int n = model.n;
+  Data data(model);
+  const VecX<double> q0 = kTarget, v0 = (VecX<double>(4) << 0.2, -0.1, 0.3, -0.2).finished();
+  const VecX<double> a = (VecX<double>(4) << 1.0, -2.0, 0.5, 1.5).finished();
+  const VecX<double> tau = (VecX<double>(4) << 2.0, -1.0, 0.5, -0.5).finished();
+  for (const double periods : {3.0, 30.0}) {  // β = 0.15 and β = 1 (interval > T_obs)
+    SCOPED_TRACE("interval of " + std::to_string(periods) + " periods");
+    Controller controller(OcpProblem(model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint,
+                                     paper_weights(n), kTarget, 10),
+                          CgmresSettings{});
+    controller.set_disturbance_observer(kObserverTime);
+    const double interval = periods * controller.dt();
+    controller.initialize(q0, v0);
+    controller.update(0.0, q0, v0, controller.dt(), tau);
+    EXPECT_EQ(controller.disturbance(), VecX<double>::Zero(n)) << "nothing observed yet";
+    const VecX<double> q1 = q0 + interval * v0, v1 = v0 + interval * a;
+    controller.update(interval, q1, v1, interval, tau);
+    const double beta = std::min(1.0, interval / kObserverTime);
+    const VecX<double> expected = beta * (rnea(model, data, q0, v0, VecX<double>((v1 - v0) / interval)) - tau);
+    EXPECT_LE(rel(controller.disturbance(), expected), kSameTorque)
+        << controller.disturbance().transpose() << " vs " << expected.transpose();
+  }
+}
+
+// The switch (set_disturbance_observer) acts from the next update: switched off, d̂ keeps its
+// last estimate (the horizon and the ID rule go on using it) until initialize sets it to zero;
+// switched on, it learns from the next measurement on.
+TEST(DisturbanceObserverStep, SwitchedOffTheEstimateIsHeldUntilInitialize) {
+  const test::Problem p = load_problem(kArm4);
+  const Model& model = p.model;
+  const int n = model.n;
+  Controller controller(OcpProblem(model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, paper_weights(n),
+                                   kTarget, 10),
+                        CgmresSettings{});
+  const double dt = controller.dt();
+  const VecX<double> v = VecX<double>::Zero(n), tau = (VecX<double>(4) << 2.0, -1.0, 0.5, -0.5).finished();
+  controller.initialize(kTarget, v);
+  controller.update(0.0, kTarget, v, dt, tau);
+  controller.update(dt, kTarget, v, dt, tau);
+  EXPECT_EQ(controller.disturbance(), VecX<double>::Zero(n)) << "off: d_hat stays 0";
+
+  controller.set_disturbance_observer(kObserverTime);  // on from the next update
+  controller.update(2 * dt, kTarget, v, dt, tau);
+  const VecX<double> learned = controller.disturbance();
+  Data data(model);
+  const VecX<double> expected = (dt / kObserverTime) * (rnea(model, data, kTarget, v, v) - tau);
+  EXPECT_LE(rel(learned, expected), kSameTorque);
+
+  controller.set_disturbance_observer(0);  // off: held
+  controller.update(3 * dt, kTarget, v, dt, 3 * tau);
+  controller.update(4 * dt, kTarget, v, dt, 3 * tau);
+  EXPECT_EQ(controller.disturbance(), learned) << "switched off, d_hat is held";
+  EXPECT_EQ(controller.problem().disturbance(), learned) << "and the horizon keeps using it";
+
+  controller.initialize(kTarget, v);
+  EXPECT_EQ(controller.disturbance(), VecX<double>::Zero(n)) << "initialize starts from zero";
+}
 
 // a measured state of the wrong size is refused in every build, before anything reads it
 TEST(Controller, RefusesAStateOfTheWrongSize) {

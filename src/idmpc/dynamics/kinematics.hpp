@@ -111,4 +111,25 @@ template <typename S> class FrameKinematics {
   Mat3<S> R_ = Mat3<S>::Identity();
 };
 
+/// @brief The world placement of `frame` at joint positions q (size n): its origin p and its
+/// rotation R (world ← frame), as FrameKinematics::compute gives them, without a workspace: the
+/// ancestors are composed from the frame's link up to the root. Reads only its arguments, so
+/// concurrent calls are safe; allocation-free. For the pose alone (no Jacobian).
+template <typename S, typename Q>
+void frame_pose(const Model& model, const Frame& frame, const Eigen::MatrixBase<Q>& q, Vec3<S>& p, Mat3<S>& R) {
+  IDMPC_CHECK_ARGUMENT(q.size() == model.n, "frame_pose: q must have size model.n");
+  // world → link: X_up of the link, then of each ancestor in turn (composed on the right)
+  Transform<S> X0, X_up;
+  for (int i = frame.link; i >= 0; i = model.parent[i]) {
+    joint_transform<S>(model, i, S(q[i]), X_up);
+    X0 = X0 * X_up;
+  }
+  Transform<S> placement;
+  placement.E = frame.placement.E.template cast<S>();
+  placement.r = frame.placement.r.template cast<S>();
+  const Transform<S> X_frame = placement * X0;
+  p = X_frame.r;
+  R = X_frame.E.transpose();
+}
+
 }  // namespace idmpc

@@ -110,16 +110,32 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
                                 " s is shorter than one control step (dt = " + std::to_string(dt) + " s)");
   }
   const std::string timestep_warning = plant.set_control_period(dt);
-  plant.reset(settings.q0, settings.v0);
-  controller.solver().enable_timing(settings.phase_timing);
-
   RunResult result;
   if (!timestep_warning.empty()) result.warnings.push_back(timestep_warning);
+  try {
+    plant.reset(settings.q0, settings.v0);
+  } catch (const std::runtime_error& e) {
+    // a MuJoCo error (load.hpp: its handler throws) at the start: nothing to run
+    result.diverged = true;
+    result.diverged_at = 0;
+    result.divergence_reason = e.what();
+    result.final_q = settings.q0;
+    result.final_v = settings.v0;
+    result.saturated_steps.assign(static_cast<size_t>(n), 0);
+    result.final_disturbance = controller.disturbance();
+    return result;
+  }
+  controller.solver().enable_timing(settings.phase_timing);
+
   const long kept = std::max(1L, settings.kept_update_times);
   result.update_ms.reserve(static_cast<size_t>(std::min(steps, kept)));
   std::mt19937_64 sampler(0x1d3c);  // reservoir sampling beyond `kept`, reproducible
   VecX<double> q = plant.q(), v = plant.v();
   TrackingMeter meter(plant.model(), settings.tracking, n);
+  // the task's stage cost at each step's own time (the controller's references are those of its
+  // last update, which latency and the solver's look-ahead h move away from t)
+  const StageTerms& terms = controller.problem().terms();
+  StageTerms::CostScratch cost_scratch = terms.cost_scratch();
   // the torque applied over the current period; the controller's output applies over the next
   VecX<double> tau = controller.initialize(q, v), tau_cmd = controller.commanded_torque();
   result.init_residual = controller.residual_norm();
@@ -163,7 +179,15 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     const double t = static_cast<double>(k) * dt;
     q = plant.q();
     v = plant.v();
-    const bool tracked = meter.measure(t, q);
+    bool tracked = false;
+    try {
+      tracked = meter.measure(t, q);
+    } catch (const std::runtime_error& e) {
+      result.diverged = true;
+      result.diverged_at = t;
+      result.divergence_reason = e.what();
+      break;
+    }
     error_sum += meter.joint_error_squared(t, q, controller);
     const long first = k * substeps;  // the plant step at t
     if (late && arrival == first) {
@@ -230,7 +254,7 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
         result.evaluations_per_update = controller.solver().evaluations();
       }
       // the task's stage cost of the measured state and the torque applied from it, every step
-      result.closed_loop_cost += dt * controller.stage_cost(q, v, tau);
+      result.closed_loop_cost += dt * terms.stage_cost_at(t, q, v, tau, cost_scratch);
       // saturation of the torque applied over this step
       bool any = false;
       for (int j = 0; j < n; ++j) {
@@ -241,19 +265,25 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
       }
       result.saturated_any += any;
       bool stepped = false;
-      if (!late) {
-        stepped = plant.step(tau, &reason);
-      } else {
-        // a late torque arriving within the period takes over from its plant step on
-        const long switch_at = arrival >= first && arrival < first + substeps ? arrival - first : substeps;
-        stepped = plant.step(tau, static_cast<int>(switch_at), pending, &reason);
-        applied(tau, switch_at);
-        applied(pending, substeps - switch_at);
-        if (switch_at < substeps) {
-          tau = pending;
-          tau_cmd = pending_cmd;
-          arrival = -1;
+      try {
+        if (!late) {
+          stepped = plant.step(tau, &reason);
+        } else {
+          // a late torque arriving within the period takes over from its plant step on
+          const long switch_at = arrival >= first && arrival < first + substeps ? arrival - first : substeps;
+          stepped = plant.step(tau, static_cast<int>(switch_at), pending, &reason);
+          applied(tau, switch_at);
+          applied(pending, substeps - switch_at);
+          if (switch_at < substeps) {
+            tau = pending;
+            tau_cmd = pending_cmd;
+            arrival = -1;
+          }
         }
+      } catch (const std::runtime_error& e) {
+        // a MuJoCo error in the step (its handler throws): the run ends here, as on a divergence
+        stepped = false;
+        reason = e.what();
       }
       if (!stepped) {
         // the plant blew up under this torque: reason says how
@@ -282,7 +312,15 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
   result.final_v = result.diverged ? v : plant.v();
   const double t_end = static_cast<double>(result.diverged ? result.steps - 1 : result.steps) * dt;
   result.final_q_error = meter.joint_error(t_end, result.final_q, controller);
-  if (!result.diverged) meter.measure(t_end, result.final_q);  // the state the run ends in
+  if (!result.diverged) {
+    try {
+      meter.measure(t_end, result.final_q);  // the state the run ends in
+    } catch (const std::runtime_error& e) {
+      result.diverged = true;
+      result.diverged_at = t_end;
+      result.divergence_reason = e.what();
+    }
+  }
   result.tracking = meter.result();
   result.final_v_norm = result.final_v.norm();
   result.joint_error_rms = std::sqrt(error_sum / std::max<double>(1.0, static_cast<double>(result.steps)));

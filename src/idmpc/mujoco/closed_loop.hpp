@@ -88,8 +88,9 @@ struct RunResult {
   double joint_error_rms = 0;
   double init_residual = 0;         ///< ‖F_0‖ after the zero-horizon Newton solve
   double mean_residual = 0;
-  /// @brief ∫ L dt of the task's stage cost (Controller::stage_cost) along the measured
-  /// trajectory and the applied torques, Σ L(q_k, v_k, τ_k)·Δt over the successful updates
+  /// @brief ∫ L dt of the task's stage cost along the measured trajectory and the applied
+  /// torques, Σ L(q_k, v_k, τ_k; t_k)·Δt over the steps before a divergence, each at the references of its own
+  /// time t_k (StageTerms::stage_cost_at; d̂ the controller's estimate then)
   double closed_loop_cost = 0;
   int evaluations_per_update = 0;   ///< F evaluations in one update
   UpdateTimes mean_phase_ms;        ///< mean of each phase [ms]
@@ -114,7 +115,10 @@ struct RunResult {
 /// @brief Runs the closed loop from (q0, v0) for `duration` (the plant's control period set to
 /// the controller's Δt beforehand, Plant::set_control_period), calling on_step for each logged
 /// step: plant I/O only, the controller owns the timing of its torques (eqs. 27–28). A
-/// divergence ends the run cleanly: it is recorded in the result, never thrown.
+/// divergence, or a MuJoCo error in the plant (its handler throws std::runtime_error, load.hpp),
+/// ends the run cleanly: it is recorded in the result (diverged, with MuJoCo's message as the
+/// reason), never thrown. Throws std::invalid_argument for bad settings (sizes, duration), and
+/// lets through what on_step throws.
 RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,
                           const std::function<void(const StepRecord&)>& on_step);
 

@@ -337,7 +337,7 @@ class Translator {
   bool autolimits_given() const {
     return std::any_of(compilers_.begin(), compilers_.end(), [](const Node* c) { return c->has("autolimits"); });
   }
-  // MuJoCo >= 2.3 limits a range given without its flag unless the file says autolimits="false"
+  // MuJoCo >= 3.0.0 limits a range given without its flag unless the file says autolimits="false"
   bool autolimits_on() const {
     bool on = true;
     for (const Node* c : compilers_) {
@@ -366,7 +366,7 @@ class Translator {
     std::string list;
     for (std::size_t k = 0; k < ranged.size() && k < 3; ++k) list += (k ? ", " : "") + ranged[k];
     if (ranged.size() > 3) list += " and " + std::to_string(ranged.size() - 3) + " more";
-    out_.notices.push_back("<compiler autolimits> set to true, MuJoCo >= 2.3's default (2.2's is false): " +
+    out_.notices.push_back("<compiler autolimits> set to true, MuJoCo >= 3.0.0's default (earlier versions' is false): " +
                            std::to_string(ranged.size()) + " range(s) without their limited flag limit (" +
                            list + ")");
   }

@@ -6,7 +6,8 @@
 /// listed. The user's files are never written.
 ///
 /// Before compilation (the text):
-/// - `<compiler autolimits>` defaults to true in MuJoCo >= 2.3 and to false in 2.2: it is set to
+/// - `<compiler autolimits>` defaults to true from MuJoCo 3.0.0 on and to false before (2.2 and
+///   2.3 included, which refuse a range without its limited flag): it is set to
 ///   true when the file leaves it out and some range (joint or tendon range, actuator ctrlrange,
 ///   forcerange or actrange) is given without its limited flag, directly or through default
 ///   classes.

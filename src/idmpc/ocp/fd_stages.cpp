@@ -178,7 +178,7 @@ void FdStages<M, Lanes>::stage_hamiltonian(const StageTerms& terms, int i, DataT
     hu = s.w;
     hu.noalias() += data.Minv.transpose() * gmm_next;
   }
-  terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
+  terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state, s.frame);
 }
 
 template <DerivativeMode M, bool Lanes>
@@ -193,7 +193,7 @@ void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
       F.head(terms.n()) = s.w + mu_all_.col(i);
       s.gq = -gq_all_.col(i);
       s.gv = -gv_all_.col(i);
-      terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
+      terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state, s.frame);
       return;
     }
   }
@@ -210,7 +210,7 @@ void FdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
       auto hu = F.head(terms.n());
       hu = s.w;
       hu.noalias() += D.Minv.transpose() * gmm_next;
-      terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
+      terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state, s.frame);
       return;
     }
   }

@@ -58,6 +58,7 @@ template <DerivativeMode M, bool Lanes> class FdStages final : public StageModel
   /// a stage's scratch vectors in one scalar type
   template <typename S> struct Scratch {
     VecX<S> tau, w, gq, gv;
+    StageTerms::FrameScratch<S> frame;  ///< the frame cost's kinematics
     explicit Scratch(int n = 0) : tau(VecX<S>::Zero(n)), w(tau), gq(tau), gv(tau) {}
   };
 

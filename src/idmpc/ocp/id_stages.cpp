@@ -154,7 +154,7 @@ void IdStages<M, Lanes>::stage_hamiltonian(const StageTerms& terms, int i, DataT
     s.gv = data.g_v;
     hu = gmm_next + s.la + data.g_a;
   }
-  terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
+  terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state, s.frame);
 }
 
 template <DerivativeMode M, bool Lanes>
@@ -168,7 +168,7 @@ void IdStages<M, Lanes>::hamiltonian(const StageTerms& terms, Evaluation ev, int
     s.gq = gq_all_.col(i);
     s.gv = gv_all_.col(i);
     F.head(terms.n()) = gmm_next + s.la + Mw_all_.col(i);
-    terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state);
+    terms.close_stage(i, q, v, u, d, rho, lmd_next, s.gq, s.gv, hq, hv, F, state, s.frame);
   } else {
     stage_hamiltonian<double>(terms, i, stage_[static_cast<size_t>(i)], scratch_, q, v, a, u, d, rho, lmd_next,
                               gmm_next, hq, hv, F, state);

@@ -43,6 +43,7 @@ template <DerivativeMode M, bool Lanes> class IdStages final : public StageModel
   /// a stage's scratch vectors in one scalar type
   template <typename S> struct Scratch {
     VecX<S> w, gq, gv, la;
+    StageTerms::FrameScratch<S> frame;  ///< the frame cost's kinematics
     explicit Scratch(int n = 0) : w(VecX<S>::Zero(n)), gq(w), gv(w), la(w) {}
   };
 

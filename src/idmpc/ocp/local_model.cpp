@@ -19,7 +19,6 @@ StageLocal::StageLocal(int n)
 
 LocalModel::LocalModel(const StageTerms& terms)
     : n_(terms.n()),
-      frame_(terms.make_frame_workspace()),
       q_(Vec::Zero(n_)),
       v_(Vec::Zero(n_)),
       lq_(Vec::Zero(n_)),
@@ -35,12 +34,7 @@ double LocalModel::state_terms(const StageTerms& terms, int i, double scale, In 
                                Eigen::Ref<MatX<double>> L_xx) {
   const int n = n_;
   const auto q = x.head(n), v = x.tail(n);
-  const auto& target = terms.frame_target();
-  if (target.has_value() != frame_.kinematics.has_value() ||
-      (target && frame_.kinematics->link() != target->frame.link)) {
-    frame_ = terms.make_frame_workspace();  // the frame target changed since
-  }
-  terms.state_gradient(i, q, v, lq_, lv_);
+  terms.state_gradient(i, q, v, lq_, lv_, frame_);
   l_x.head(n) = scale * lq_;
   l_x.tail(n) = scale * lv_;
   L_xx.setZero();

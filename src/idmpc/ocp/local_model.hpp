@@ -100,7 +100,7 @@ class LocalModel {
   static double torque_cost(const StageTerms& terms, int i, In tau, Out g);
 
   int n_;
-  StageTerms::FrameWorkspace frame_;
+  StageTerms::FrameScratch<double> frame_;
   Vec q_, v_, lq_, lv_, hvv_, g_, W_;
 };
 

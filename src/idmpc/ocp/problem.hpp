@@ -160,8 +160,8 @@ class OcpProblem {
 
   /// @brief Terminal costates λ_N = ∂φ/∂q, γ_N = ∂φ/∂v (eqs. 16, 18) at the end of a horizon of
   /// `stages` stages (its references are those of stage `stages`).
-  void terminal_costate(int stages, In q, In v, Out lmd, Out gmm) const {
-    terms_.state_gradient(stages, q, v, lmd, gmm);
+  void terminal_costate(int stages, In q, In v, Out lmd, Out gmm) {
+    terms_.state_gradient(stages, q, v, lmd, gmm, terminal_frame_);
   }
 
   /// @brief The stage calls above in dual numbers (StageModel): the same arithmetic, stage by
@@ -176,8 +176,8 @@ class OcpProblem {
                          DualIn lmd_next, DualIn gmm_next, DualOut hq, DualOut hv, DualOut F, bool state) {
     stages_->hamiltonian(terms_, ev, i, q, v, a, u, d, rho, lmd_next, gmm_next, hq, hv, F, state);
   }
-  void terminal_costate(int stages, DualIn q, DualIn v, DualOut lmd, DualOut gmm) const {
-    terms_.state_gradient(stages, q, v, lmd, gmm);
+  void terminal_costate(int stages, DualIn q, DualIn v, DualOut lmd, DualOut gmm) {
+    terms_.state_gradient(stages, q, v, lmd, gmm, terminal_frame_dual_);
   }
   /// @brief Sizes the stages' dual-number workspaces (kept across set_stages_in_lanes).
   void reserve_dual() {
@@ -200,6 +200,8 @@ class OcpProblem {
   std::unique_ptr<StageModel> make_stages() const;
 
   StageTerms terms_;
+  StageTerms::FrameScratch<double> terminal_frame_;  ///< the terminal cost's frame kinematics
+  StageTerms::FrameScratch<Dual> terminal_frame_dual_;
   Formulation formulation_;
   DerivativeMode mode_;
   int N_;

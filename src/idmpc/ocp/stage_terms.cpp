@@ -1,5 +1,6 @@
 #include "idmpc/ocp/stage_terms.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -17,6 +18,12 @@ const Model& checked(const std::shared_ptr<const Model>& model) {
 }
 
 std::string frame_label(const Frame& frame) { return "frame target '" + frame.name + "'"; }
+
+// a fresh id for each frame target set, so that a FrameScratch knows whether it fits
+std::uint64_t next_frame_id() {
+  static std::atomic<std::uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
 
 // a target pose: a finite position and a rotation matrix
 void check_pose(const Frame& frame, const Vec3<double>& position, const Mat3<double>& rotation) {
@@ -65,9 +72,8 @@ StageTerms::StageTerms(const StageTerms& o)
       dtau_(o.dtau_),
       sampled_(o.sampled_),
       frame_(o.frame_),
-      p_ref_(o.p_ref_),
-      frame_double_(o.frame_double_),
-      frame_dual_(o.frame_dual_) {}
+      frame_id_(o.frame_id_),
+      p_ref_(o.p_ref_) {}
 
 StageTerms& StageTerms::operator=(const StageTerms& o) {
   if (this != &o) {
@@ -107,8 +113,7 @@ void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
   sampled_ = false;
   if (!target) {
     frame_.reset();
-    frame_double_ = {};
-    frame_dual_ = {};
+    frame_id_ = 0;
     return;
   }
   const FrameTarget& f = *target;
@@ -119,10 +124,7 @@ void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
   }
   check_pose(f.frame, f.position, f.rotation);
   frame_ = target;
-  frame_double_.kinematics.emplace(*model_, frame_->frame);
-  frame_double_.jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
-  frame_dual_.kinematics.emplace(*model_, frame_->frame);
-  frame_dual_.jacobian = Eigen::Matrix<Dual, 6, Eigen::Dynamic>::Zero(6, n());
+  frame_id_ = next_frame_id();
   p_ref_ = frame_->position.replicate(1, N_ + 1);
 }
 
@@ -188,29 +190,70 @@ void StageTerms::update_frame_references() {
   }
 }
 
-double StageTerms::stage_cost(int i, In q, In v, In u) const {
+double StageTerms::cost_against(In q, In v, In u, In q_ref, In v_ref, In u_ref, const Vec3<double>& p_ref) const {
   const OcpWeights& w = cost_.weights();
   auto quadratic = [](const auto& e, const auto& W) { return 0.5 * e.dot(W.cwiseProduct(e)); };  // W: VecX or Vec3, no copy
-  double L = quadratic(q - q_ref_.col(i), w.Qq) + quadratic(v - v_ref_.col(i), w.Qv) +
-             quadratic(u - u_ref_.col(i), w.R);
+  const double L = quadratic(q - q_ref, w.Qq) + quadratic(v - v_ref, w.Qv) + quadratic(u - u_ref, w.R);
   if (!frame_) return L;
-  FrameKinematics<double>& fk = *frame_double_.kinematics;
-  fk.compute(*model_, q);
-  const Vec3<double> e = fk.position() - p_ref_.col(i);
+  // the frame's pose without a workspace: this stays const for concurrent callers
+  Vec3<double> p;
+  Mat3<double> R;
+  frame_pose(*model_, frame_->frame, q, p, R);
+  const Vec3<double> e = p - p_ref;
   // w_o(1 − cos θ), cos θ = (tr(R_refᵀR) − 1)/2
-  const double cos_theta = 0.5 * ((frame_->rotation.transpose() * fk.rotation()).trace() - 1);
+  const double cos_theta = 0.5 * ((frame_->rotation.transpose() * R).trace() - 1);
   return L + quadratic(e, frame_->position_weight) + frame_->orientation_weight * (1 - cos_theta);
 }
 
+double StageTerms::stage_cost(int i, In q, In v, In u) const {
+  return cost_against(q, v, u, q_ref_.col(i), v_ref_.col(i), u_ref_.col(i),
+                      frame_ ? Vec3<double>(p_ref_.col(i)) : Vec3<double>::Zero());
+}
+
+StageTerms::CostScratch StageTerms::cost_scratch() const {
+  const int n = this->n();
+  return CostScratch{Vec::Zero(n), Vec::Zero(n), Vec::Zero(n), Vec::Zero(n), Data(*model_, DataParts::rnea()),
+                     Vec3<double>::Zero(), Vec3<double>::Zero()};
+}
+
+double StageTerms::stage_cost_at(double t, In q, In v, In u, CostScratch& s) const {
+  IDMPC_CHECK_ARGUMENT(s.q_ref.size() == n() && s.data.n == n(),
+                       "StageTerms::stage_cost_at: the scratch is not this problem's (cost_scratch())");
+  if (joint_trajectory_) {
+    joint_trajectory_->sample(t, s.q_ref, s.v_ref);
+    s.u_ref = rnea(*model_, s.data, s.q_ref, s.zero, s.zero) - d_hat_;
+  } else {
+    // a fixed target: the same references at every time
+    s.q_ref = q_ref_.col(0);
+    s.v_ref = v_ref_.col(0);
+    s.u_ref = u_ref_.col(0);
+  }
+  s.p_ref.setZero();
+  if (frame_) {
+    if (frame_trajectory_) {
+      frame_trajectory_->sample(t, s.p_ref, s.rate3);
+    } else {
+      s.p_ref = frame_->position;
+    }
+  }
+  return cost_against(q, v, u, s.q_ref, s.v_ref, s.u_ref, s.p_ref);
+}
+
 template <typename S>
-void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v) const {
+void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v,
+                                   FrameScratch<S>& scratch) const {
   const VecX<double>& Qq = cost_.weights().Qq;
   const VecX<double>& Qv = cost_.weights().Qv;
   L_q = Qq.cwiseProduct(q - q_ref_.col(i));
   L_v = Qv.cwiseProduct(v - v_ref_.col(i));
   if (!frame_) return;
   // Jᵀf with f_lin = w_p∘(p − p_ref), f_ang = ½w_o vee(A − Aᵀ), A = R R_refᵀ (cost.hpp)
-  FrameScratch<S>& scratch = frame_scratch<S>();
+  if (scratch.frame_id != frame_id_) {
+    // sized for this frame target once (the first evaluation after set_frame_target)
+    scratch.kinematics.emplace(*model_, frame_->frame);
+    scratch.jacobian = Eigen::Matrix<S, 6, Eigen::Dynamic>::Zero(6, n());
+    scratch.frame_id = frame_id_;
+  }
   FrameKinematics<S>& fk = *scratch.kinematics;
   fk.compute(*model_, q);
   const Vec3<S> f_lin = frame_->position_weight.cwiseProduct(fk.position() - p_ref_.col(i));
@@ -226,54 +269,53 @@ void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q,
   }
 }
 
-void StageTerms::state_gradient(int i, In q, In v, Out L_q, Out L_v) const {
-  state_gradient_of<double>(i, q, v, L_q, L_v);
+void StageTerms::state_gradient(int i, In q, In v, Out L_q, Out L_v, FrameScratch<double>& frame) const {
+  state_gradient_of<double>(i, q, v, L_q, L_v, frame);
 }
 
-void StageTerms::state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const {
-  state_gradient_of<Dual>(i, q, v, L_q, L_v);
+void StageTerms::state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v,
+                                FrameScratch<Dual>& frame) const {
+  state_gradient_of<Dual>(i, q, v, L_q, L_v, frame);
 }
 
 }  // namespace idmpc
 
 namespace idmpc {
 
-StageTerms::FrameWorkspace StageTerms::make_frame_workspace() const {
-  FrameWorkspace ws;
-  if (frame_) {
-    ws.kinematics.emplace(*model_, frame_->frame);
-    ws.jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
-    ws.weighted = Eigen::Matrix<double, 3, Eigen::Dynamic>::Zero(3, n());
-  }
-  return ws;
-}
-
-void StageTerms::state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv, FrameWorkspace& ws) const {
+void StageTerms::state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv,
+                               FrameScratch<double>& scratch) const {
   (void)i;  // the weights and the target's orientation are the same at every stage
   const OcpWeights& w = cost_.weights();
   H_qq.setZero();
   H_qq.diagonal() = w.Qq;
   H_vv = w.Qv;
   if (!frame_) return;
-  if (!ws.kinematics) throw std::logic_error("state_hessian: the workspace was made without the frame target");
-  FrameKinematics<double>& fk = *ws.kinematics;
+  if (scratch.frame_id != frame_id_) {
+    scratch.kinematics.emplace(*model_, frame_->frame);
+    scratch.jacobian = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, n());
+    scratch.frame_id = frame_id_;
+  }
+  FrameKinematics<double>& fk = *scratch.kinematics;
   fk.compute(*model_, q);
-  fk.jacobian(ws.jacobian);
-  const auto Jp = ws.jacobian.topRows<3>();
-  const auto Jw = ws.jacobian.bottomRows<3>();
-  ws.weighted.noalias() = frame_->position_weight.asDiagonal() * Jp;
-  H_qq.noalias() += Jp.transpose() * ws.weighted;
+  fk.jacobian(scratch.jacobian);
+  const auto Jp = scratch.jacobian.topRows<3>();
+  const auto Jw = scratch.jacobian.bottomRows<3>();
+  // w_o(1 − cos θ) = w_o(1 − (tr E − 1)/2) with E = R R_refᵀ; turning the frame by exp([δ]×)
+  // gives tr(exp([δ]×)E), whose second-order term is ½δᵀ(E_sym − tr(E) I)δ
+  Mat3<double> H_psd = Mat3<double>::Zero();
   if (frame_->orientation_weight > 0) {
-    // w_o(1 − cos θ) = w_o(1 − (tr E − 1)/2) with E = R R_refᵀ; turning the frame by exp([δ]×)
-    // gives tr(exp([δ]×)E), whose second-order term is ½δᵀ(E_sym − tr(E) I)δ
     const Mat3<double> E = fk.rotation() * frame_->rotation.transpose();
     const Mat3<double> H =
         (0.5 * frame_->orientation_weight) * (E.trace() * Mat3<double>::Identity() - 0.5 * (E + E.transpose()));
     Eigen::SelfAdjointEigenSolver<Mat3<double>> eig(H);
-    const Mat3<double> H_psd =
-        eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
-    ws.weighted.noalias() = H_psd * Jw;
-    H_qq.noalias() += Jw.transpose() * ws.weighted;
+    H_psd = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * eig.eigenvectors().transpose();
+  }
+  // column by column through fixed-size 3-vectors: no temporaries
+  for (Eigen::Index c = 0; c < H_qq.cols(); ++c) {
+    const Vec3<double> tp = frame_->position_weight.cwiseProduct(Jp.col(c));
+    const Vec3<double> tw = H_psd * Jw.col(c);
+    H_qq.col(c).noalias() += Jp.transpose() * tp;
+    H_qq.col(c).noalias() += Jw.transpose() * tw;
   }
 }
 

@@ -11,10 +11,14 @@
 /// Trajectory of the joint target, or of the frame target's position) is sampled at the stage
 /// times t_i = t0 + i·Δτ that set_stage_times gives, once per distinct (t0, Δτ): v_ref,i is the
 /// joint trajectory's rate there.
+///
+/// Threads: the const methods read only the object and their arguments. What the frame cost
+/// computes along the way is kept in a FrameScratch of the caller's (one per thread), sized on
+/// its first use with a frame target, so that a stage evaluation allocates nothing after that.
 
+#include <cstdint>
 #include <memory>
 #include <optional>
-#include <type_traits>
 
 #include "idmpc/dynamics/kinematics.hpp"
 #include "idmpc/model/data.hpp"
@@ -46,6 +50,25 @@ class StageTerms {
   StageTerms(StageTerms&&) noexcept = default;
   StageTerms& operator=(StageTerms&&) noexcept = default;
   ~StageTerms() = default;
+
+  /// @brief The frame cost's workspace in scalar S (the frame's kinematics and Jacobian): the
+  /// caller's own, passed to state_gradient and close_stage. Empty when made; those calls size
+  /// it for the problem's frame target on first use (and again after set_frame_target), and
+  /// leave it alone without a frame target.
+  template <typename S> struct FrameScratch {
+    std::optional<FrameKinematics<S>> kinematics;
+    Eigen::Matrix<S, 6, Eigen::Dynamic> jacobian;
+    std::uint64_t frame_id = 0;  ///< the frame target it is sized for (StageTerms' frame_id_)
+  };
+
+  /// @brief The workspace of stage_cost_at: the references at one time and ID(q_ref, 0, 0).
+  struct CostScratch {
+    Vec q_ref, v_ref, u_ref, zero;
+    Data data;
+    Vec3<double> p_ref, rate3;
+  };
+  /// @brief A CostScratch for this problem's model (allocates).
+  CostScratch cost_scratch() const;
 
   const Model& model() const { return *model_; }
   const std::shared_ptr<const Model>& model_ptr() const { return model_; }
@@ -114,42 +137,40 @@ class StageTerms {
   }
 
   /// @brief The state part of stage i's cost gradient, ∂L/∂q and ∂L/∂v (i = N: ∂φ/∂q, ∂φ/∂v,
-  /// the terminal costates): the joint terms and, with a frame target, Jᵀf (cost.hpp).
-  void state_gradient(int i, In q, In v, Out L_q, Out L_v) const;
-  void state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v) const;
-
-  /// @brief Caller-owned scratch of state_hessian (thread-safe: nothing of the StageTerms is
-  /// written); make_frame_workspace sizes it for this problem's frame target, if any.
-  struct FrameWorkspace {
-    std::optional<FrameKinematics<double>> kinematics;
-    Eigen::Matrix<double, 6, Eigen::Dynamic> jacobian;
-    Eigen::Matrix<double, 3, Eigen::Dynamic> weighted;  ///< a weight times a 3 × n block of the Jacobian
-  };
-  FrameWorkspace make_frame_workspace() const;
+  /// the terminal costates): the joint terms and, with a frame target, Jᵀf (cost.hpp), computed
+  /// in the caller's `frame` workspace.
+  void state_gradient(int i, In q, In v, Out L_q, Out L_v, FrameScratch<double>& frame) const;
+  void state_gradient(int i, DualIn q, DualIn v, DualOut L_q, DualOut L_v, FrameScratch<Dual>& frame) const;
 
   /// @brief The Gauss–Newton Hessian of stage i's state cost (i = N: the terminal cost):
   /// H_qq = diag(Q_q) + J_pᵀdiag(w_p)J_p + J_ωᵀ H_θ J_ω and H_vv = Q_v (diagonal), with
   /// H_θ = ½w_o(tr(E)·I − sym E), E = R R_refᵀ, the exact Hessian of w_o(1 − cos θ) in the
   /// rotation's own increment, its negative eigenvalues (far from the target) set to zero. At a
   /// point where every residual vanishes it is the exact Hessian of the cost. Overwrites H_qq
-  /// (n × n) and H_vv (n); `ws` from make_frame_workspace.
-  void state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv, FrameWorkspace& ws) const;
+  /// (n × n) and H_vv (n); `frame` as for state_gradient. Allocation-free once `frame` is sized.
+  void state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv, FrameScratch<double>& frame) const;
 
   /// @brief The value of stage i's cost without its acceleration term, the task's stage cost:
   /// ½(q − q_ref,i)ᵀQ_q(·) + ½(v − v_ref,i)ᵀQ_v(·) + ½(u − u_ref,i)ᵀR(·) + φ_frame(q) (cost.hpp).
-  /// What a closed loop accumulates along its measured trajectory; allocation-free.
+  /// Allocation-free.
   double stage_cost(int i, In q, In v, In u) const;
+  /// @brief The same cost at the references of time t itself (a moving reference sampled at t,
+  /// u_ref = ID(q_ref(t), 0, 0) − d̂), whatever stage times were set last: what a closed loop
+  /// accumulates along its measured trajectory. Allocation-free, in the caller's `scratch`
+  /// (cost_scratch()).
+  double stage_cost_at(double t, In q, In v, In u, CostScratch& scratch) const;
 
   /// @brief The rest of stage i's block F_i once its first n rows hold ∂H/∂input: ∂H/∂d =
   /// −r_d + 2s∘ρ∘d and ∂H/∂ρ = s∘c; with `state` also hq = ∂L/∂q + gq and hv = ∂L/∂v + λ_{i+1}
   /// + gv (the Euler step q_{i+1} = q_i + Δτ v_i), for the dynamics' parts gq, gv of ∂H/∂q, ∂H/∂v.
+  /// The frame cost's part is computed in the caller's `frame` workspace.
   void close_stage(int i, In q, In v, In u, In d, In rho, In lmd_next, In gq, In gv, Out hq, Out hv, Out F,
-                   bool state) const {
-    close_stage_of<double>(i, q, v, u, d, rho, lmd_next, gq, gv, hq, hv, F, state);
+                   bool state, FrameScratch<double>& frame) const {
+    close_stage_of<double>(i, q, v, u, d, rho, lmd_next, gq, gv, hq, hv, F, state, frame);
   }
   void close_stage(int i, DualIn q, DualIn v, DualIn u, DualIn d, DualIn rho, DualIn lmd_next, DualIn gq,
-                   DualIn gv, DualOut hq, DualOut hv, DualOut F, bool state) const {
-    close_stage_of<Dual>(i, q, v, u, d, rho, lmd_next, gq, gv, hq, hv, F, state);
+                   DualIn gv, DualOut hq, DualOut hv, DualOut F, bool state, FrameScratch<Dual>& frame) const {
+    close_stage_of<Dual>(i, q, v, u, d, rho, lmd_next, gq, gv, hq, hv, F, state, frame);
   }
 
  private:
@@ -160,31 +181,21 @@ class StageTerms {
     w = cost_.weights().R.cwiseProduct(u - u_ref_.col(i));
     bounds_.add_torque_gradient(u, rho, w);
   }
-  template <typename S> void state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v) const;
+  template <typename S>
+  void state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v, FrameScratch<S>& frame) const;
   template <typename S>
   void close_stage_of(int i, RefIn<S> q, RefIn<S> v, RefIn<S> u, RefIn<S> d, RefIn<S> rho, RefIn<S> lmd_next,
-                      RefIn<S> gq, RefIn<S> gv, RefOut<S> hq, RefOut<S> hv, RefOut<S> F, bool state) const {
+                      RefIn<S> gq, RefIn<S> gv, RefOut<S> hq, RefOut<S> hv, RefOut<S> F, bool state,
+                      FrameScratch<S>& frame) const {
     const int n = this->n(), m = this->m();
     if (m > 0) bounds_.dummy_gradients(u, d, rho, F.segment(n, m), F.segment(n + m, m));
     if (!state) return;
-    state_gradient(i, q, v, hq, hv);
+    state_gradient(i, q, v, hq, hv, frame);
     hq += gq;
     hv += lmd_next + gv;
   }
-
-  /// The frame's kinematics at a stage's q and what its gradient needs, in one scalar type
-  /// (state_gradient is const: scratch, not state).
-  template <typename S> struct FrameScratch {
-    std::optional<FrameKinematics<S>> kinematics;
-    Eigen::Matrix<S, 6, Eigen::Dynamic> jacobian;
-  };
-  template <typename S> FrameScratch<S>& frame_scratch() const {
-    if constexpr (std::is_same_v<S, Dual>) {
-      return frame_dual_;
-    } else {
-      return frame_double_;
-    }
-  }
+  // the cost of (q, v, u) against the given references
+  double cost_against(In q, In v, In u, In q_ref, In v_ref, In u_ref, const Vec3<double>& p_ref) const;
 
   // q_ref_, v_ref_ and u_ref_ = ID(q_ref, 0, 0) − d̂ of every stage, from the fixed target or the
   // joint trajectory's samples
@@ -206,9 +217,8 @@ class StageTerms {
   bool sampled_ = false;      ///< whether the moving references hold samples at (t0_, dtau_)
 
   std::optional<FrameTarget> frame_;
+  std::uint64_t frame_id_ = 0;          ///< the frame target's, unique per set_frame_target (0: none)
   MatX<double> p_ref_;                  ///< 3 × (N+1) frame positions
-  mutable FrameScratch<double> frame_double_;
-  mutable FrameScratch<Dual> frame_dual_;
   Vec3<double> sample3_, rate3_;
 };
 

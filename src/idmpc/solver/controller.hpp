@@ -12,9 +12,10 @@
 ///
 /// Offset-free tracking (formulations.md §Disturbance observer), off unless enabled: a disturbance observer estimates the
 /// joint torque d̂ the model misses from each measured velocity change,
-///   d̂ ← (1 − β) d̂ + β (ID(q⁻, v⁻, (v − v⁻)/Δt) − τ⁻),   β = Δt / T_obs,
-/// with (q⁻, v⁻) the previous measurement and τ⁻ the torque applied over [t − Δt, t) (known from
-/// the timing above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
+///   d̂ ← (1 − β) d̂ + β (ID(q⁻, v⁻, (v − v⁻)/Δt) − τ⁻),   β = min(1, Δt / T_obs),
+/// with (q⁻, v⁻) the previous measurement, Δt the time since it (the control period, or the
+/// interval given to update) and τ⁻ the torque applied over [t − Δt, t) (known from the timing
+/// above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
 
 #include <memory>
 #include <optional>
@@ -140,12 +141,14 @@ class Controller {
   const Vec& torque_lower() const { return lower_; }
   const Vec& torque_upper() const { return upper_; }
 
-  /// @brief Turns the disturbance observer on with time constant T_obs [s] (≥ Δt: β = Δt/T_obs),
-  /// or off with 0 (d̂ then stays 0). Throws std::invalid_argument for a negative or non-finite
-  /// value. Takes effect from the next initialize.
+  /// @brief Turns the disturbance observer on with time constant T_obs [s] (β = min(1, Δt/T_obs)),
+  /// or off with 0. Takes effect at the next update: switched on, d̂ learns from the next
+  /// measurement on; switched off, d̂ holds its last estimate (the horizon and the ID rule keep
+  /// using it) until initialize sets it to zero. Off from the start, d̂ stays 0. Throws
+  /// std::invalid_argument for a negative or non-finite value.
   void set_disturbance_observer(double time_constant);
   double disturbance_observer() const { return observer_time_constant_; }
-  /// @brief The current estimate d̂ (zero with the observer off).
+  /// @brief The current estimate d̂ (zero after initialize; held while the observer is off).
   const Vec& disturbance() const { return problem().disturbance(); }
 
   /// @brief The torque of the last initialize/update, within the limits: what the plant gets.
