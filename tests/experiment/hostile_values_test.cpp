@@ -9,11 +9,13 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "idmpc/experiment/run_record.hpp"
 #include "idmpc/experiment/task.hpp"
 #include "idmpc/experiment/trajectory_io.hpp"
 #include "idmpc/ocp/trajectory.hpp"
@@ -138,6 +140,41 @@ TEST(TrajectoryFromJson, ReferencesThatWouldSampleNaNAreRefusedNamingTheField) {
   const nlohmann::json csv = {{"shape", "csv"}, {"file", "plan.csv"}};
   expect_names(refusal([&] { trajectory_from_json(csv, where, start, dir.path()); }),
                {"reach.json", "'file'", "plan.csv", "line 3", "1e-310"});
+}
+
+// a run summary (render reads the one beside a log) with a field missing or of another type: the
+// error names the file and the field and says what was expected, not the JSON library's text
+TEST(RunSummary, AMistypedFieldIsNamedWithWhatWasExpected) {
+  RunSummary s;
+  s.task = arm_defaults();
+  s.task.qref = {0.5, 0};
+  s.n = 2;
+  s.torque_lower = {-1, -1};
+  s.torque_upper = {1, 1};
+  s.saturated_steps = {0, 0};
+  const nlohmann::json good = to_json(s);
+  ASSERT_NO_THROW(summary_from_json(good, "run.json"));
+  auto message = [&](const std::function<void(nlohmann::json&)>& change) -> std::string {
+    nlohmann::json j = good;
+    change(j);
+    try {
+      summary_from_json(j, "run.json");
+    } catch (const std::runtime_error& e) {
+      return e.what();
+    }
+    ADD_FAILURE() << "accepted: " << j.dump().substr(0, 200);
+    return "";
+  };
+  const std::string n = message([](nlohmann::json& j) { j["n"] = "two"; });
+  expect_names(n, {"run summary 'run.json'", "field 'n'", "an integer", "\"two\""});
+  EXPECT_EQ(n.find("json.exception"), std::string::npos) << n;
+  expect_names(message([](nlohmann::json& j) { j["latency"]["updates"] = 1.5; }),
+               {"'latency.updates'", "an integer", "1.5"});
+  expect_names(message([](nlohmann::json& j) { j["phase_ms"] = 3; }), {"'phase_ms'", "an object"});
+  expect_names(message([](nlohmann::json& j) { j.erase("warnings"); }), {"missing field 'warnings'"});
+  expect_names(message([](nlohmann::json& j) { j["torque_lower"] = {1, "x"}; }),
+               {"'torque_lower'", "a list of numbers or nulls"});
+  expect_names(message([](nlohmann::json& j) { j["diverged"] = true; }), {"'diverged_at'"});
 }
 
 }  // namespace
