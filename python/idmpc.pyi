@@ -183,6 +183,8 @@ class Task:
     init_full_horizon: bool
     shooting: str
     products: str
+    solver: str
+    riccati: RiccatiSettings
     latency: str
     @overload
     def __init__(self) -> None: ...
@@ -215,6 +217,17 @@ class CgmresSettings:
     def __init__(self) -> None: ...
     def validate(self) -> None: ...
 
+class RiccatiSettings:
+    iterations: int
+    tolerance: float
+    init_iterations: int
+    init_tolerance: float
+    barrier: float
+    regularization: float
+    line_search: bool
+    def __init__(self) -> None: ...
+    def validate(self) -> None: ...
+
 class OcpWeights:
     Qq: Vector
     Qv: Vector
@@ -226,7 +239,9 @@ class ControllerSettings:
     formulation: str
     derivatives: str
     N: int
+    solver: str
     cgmres: CgmresSettings
+    riccati: RiccatiSettings
     weights: OcpWeights
     q_ref: Vector
     joint_reference: Optional[Trajectory]
