@@ -29,21 +29,21 @@ plant, controller = run.plant, run.controller
 
 # the library's sequence: initialize at x(0); per step, update at t from the measured state,
 # apply the previous update's torque for one period, then take the new one
-dt = controller.dt()
+dt = controller.dt
 plant.reset(run.q0, np.zeros(run.n))
-tau = controller.initialize(plant.q(), plant.v())
+tau = controller.initialize(plant.q, plant.v)
 updates = 0
 for k in range(int(np.floor(task.duration / dt + 0.5))):
-    if not controller.update(k * dt, plant.q(), plant.v()):
-        print("diverged at t =", k * dt, ":", controller.failure())
+    if not controller.update(k * dt, plant.q, plant.v):
+        print("diverged at t =", k * dt, ":", controller.failure)
         break
     updates += 1
     ok, reason = plant.step(tau)
     if not ok:
         print("the simulation failed:", reason)
         break
-    tau = controller.torque()
-error = np.abs(plant.q() - controller.q_ref()).max()
+    tau = controller.torque
+error = np.abs(plant.q - controller.q_ref).max()
 print(f"Python loop:   {updates} updates, final max|q - q_ref| = {error:.6g}")
 
 record = idmpc.TaskRun(task).run()

@@ -2,6 +2,7 @@
 /// @file bindings.hpp
 /// @brief The parts of the Python module idmpc, one function per C++ layer they bind.
 
+#include <stdexcept>
 #include <string>
 
 #include <pybind11/pybind11.h>
@@ -29,7 +30,14 @@ void check_size(const char* name, Eigen::Index size, int n);
 /// read and write the same text).
 py::object json_loads(const std::string& text);
 /// @brief A Python object (dict, list, numbers, strings; numpy arrays and scalars as their
-/// tolist()) as JSON text; non-finite floats raise ValueError as in Python's json module.
-std::string json_dumps(const py::handle& obj);
+/// tolist()) as JSON text. A non-finite float throws std::invalid_argument (ValueError) "<where>:
+/// field '<place>': expected a finite number, got nan".
+std::string json_dumps(const py::handle& obj, const std::string& where);
+
+/// @brief What a failed debug check throws in the module: idmpc.DebugCheckError (an
+/// AssertionError) in Python.
+struct DebugCheckFailed : std::logic_error {
+  using std::logic_error::logic_error;
+};
 
 }  // namespace idmpc::python

@@ -1,6 +1,7 @@
 // The controller, the MuJoCo plant and a task's closed loop (TaskRun). run() collects the
 // per-step records in C++ with the GIL released and converts them to numpy arrays once.
 
+#include <chrono>
 #include <cstring>
 #include <memory>
 #include <vector>
@@ -48,15 +49,33 @@ py::array_t<double> to_array(const std::vector<double>& x, size_t columns = 0) {
   return a;
 }
 
+// thrown out of the closed loop when Python has a signal to handle (Ctrl-C): its exception
+// (KeyboardInterrupt) is set, and raised once the GIL is back
+struct Interrupted {};
+
+// how often the closed loop lets Python handle its signals: a step of a long run takes a
+// fraction of a millisecond, taking the GIL every step would cost more than the step
+constexpr auto kSignalCheckPeriod = std::chrono::milliseconds(50);
+
 py::dict run_task_run(mj::TaskRun& run) {
   Rows rows;
   rows.n = run.n();
   mj::RunResult result;
   RunSummary summary;
-  {
+  try {
     py::gil_scoped_release release;
-    result = run.run([&rows](const mj::StepRecord& s) { rows.add(s); });
+    auto next_check = std::chrono::steady_clock::now() + kSignalCheckPeriod;
+    result = run.run([&rows, &next_check](const mj::StepRecord& s) {
+      rows.add(s);
+      const auto now = std::chrono::steady_clock::now();
+      if (now < next_check) return;
+      next_check = now + kSignalCheckPeriod;
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) throw Interrupted{};
+    });
     summary = run.summary(result);
+  } catch (const Interrupted&) {
+    throw py::error_already_set();  // the signal handler's exception, KeyboardInterrupt for Ctrl-C
   }
   const auto n = static_cast<size_t>(rows.n);
   py::dict d;
@@ -174,13 +193,15 @@ void bind_control(py::module_& m) {
 
   py::class_<Controller>(m, "Controller",
                          "The NMPC controller: the problem (FD or ID formulation), C/GMRES and the torque rule. "
-                         "initialize(q, v) once, then update(t, q, v) every dt(); torque() is what to apply next.")
+                         "initialize(q, v) once, then update(t, q, v) every dt; torque is what to apply next. What it has "
+                         "(sizes, the latest results, the target and limits) are read-only attributes, what it "
+                         "does are methods.")
       .def(py::init([](std::shared_ptr<Model> model, const ControllerSettings& settings) {
              return std::make_unique<Controller>(std::move(model), settings);
            }),
            py::arg("model"), py::arg("settings"))
-      .def("n", &Controller::n)
-      .def("dt", &Controller::dt)
+      .def_property_readonly("n", &Controller::n)
+      .def_property_readonly("dt", &Controller::dt)
       .def(
           "initialize",
           [](Controller& c, const Vector& q, const Vector& v) -> Vector {
@@ -200,17 +221,17 @@ void bind_control(py::module_& m) {
             return c.update(t, q, v);
           },
           py::arg("t"), py::arg("q"), py::arg("v"),
-          "One control update at time t; True and torque() for the next period, or False and failure().")
-      .def("torque", [](const Controller& c) -> Vector { return c.torque(); }, "the torque to apply (within the limits)")
-      .def("commanded_torque", [](const Controller& c) -> Vector { return c.commanded_torque(); },
+          "One control update at time t; True and torque for the next period, or False and failure.")
+      .def_property_readonly("torque", [](const Controller& c) -> Vector { return c.torque(); }, "the torque to apply (within the limits)")
+      .def_property_readonly("commanded_torque", [](const Controller& c) -> Vector { return c.commanded_torque(); },
            "the torque before clamping to the limits")
-      .def("failure", &Controller::failure, "why the last initialize/update failed, or \"\"")
-      .def("residual_norm", &Controller::residual_norm)
-      .def("constraint_violation", &Controller::constraint_violation)
-      .def("disturbance", [](const Controller& c) -> Vector { return c.disturbance(); },
+      .def_property_readonly("failure", &Controller::failure, "why the last initialize/update failed, or \"\"")
+      .def_property_readonly("residual_norm", &Controller::residual_norm)
+      .def_property_readonly("constraint_violation", &Controller::constraint_violation)
+      .def_property_readonly("disturbance", [](const Controller& c) -> Vector { return c.disturbance(); },
            "the observer's estimate of the unmodeled joint torque")
-      .def("applied_acceleration", [](const Controller& c) -> Vector { return c.applied_acceleration(); })
-      .def("q_ref", [](const Controller& c) -> Vector { return c.q_ref(); })
+      .def_property_readonly("applied_acceleration", [](const Controller& c) -> Vector { return c.applied_acceleration(); })
+      .def_property_readonly("q_ref", [](const Controller& c) -> Vector { return c.q_ref(); })
       .def(
           "set_target",
           [](Controller& c, const Vector& q_ref) {
@@ -222,18 +243,20 @@ void bind_control(py::module_& m) {
            "A new pose for the frame target from the next update on (a frame reference, if any, keeps moving "
            "the position). ValueError without a frame target, for a non-finite position or a rotation that is "
            "not one.")
-      .def(
+      .def_property_readonly(
           "frame_target", [](const Controller& c) { return c.problem().terms().frame_target(); },
           "the frame target the horizon weighs (a copy), or None")
       .def("set_torque_limits", &Controller::set_torque_limits, py::arg("lower"), py::arg("upper"))
-      .def("torque_lower", [](const Controller& c) -> Vector { return c.torque_lower(); })
-      .def("torque_upper", [](const Controller& c) -> Vector { return c.torque_upper(); })
+      .def_property_readonly("torque_lower", [](const Controller& c) -> Vector { return c.torque_lower(); })
+      .def_property_readonly("torque_upper", [](const Controller& c) -> Vector { return c.torque_upper(); })
       .def("set_disturbance_observer", &Controller::set_disturbance_observer, py::arg("time_constant"));
 
-  py::class_<mj::Plant>(m, "Plant", "The MuJoCo simulation the controller drives, one control period per step.")
-      .def("nv", &mj::Plant::nv)
-      .def("timestep", &mj::Plant::timestep, "MuJoCo's timestep [s]")
-      .def("substeps", &mj::Plant::substeps, "MuJoCo steps per control period")
+  py::class_<mj::Plant>(m, "Plant",
+                        "The MuJoCo simulation the controller drives, one control period per step: its state and "
+                        "sizes are read-only attributes, reset, step and set_control_period methods.")
+      .def_property_readonly("nv", &mj::Plant::nv)
+      .def_property_readonly("timestep", &mj::Plant::timestep, "MuJoCo's timestep [s]")
+      .def_property_readonly("substeps", &mj::Plant::substeps, "MuJoCo steps per control period")
       .def("set_control_period", &mj::Plant::set_control_period, py::arg("dt"),
            "Sets the control period; returns a warning if the timestep had to change, else \"\".")
       .def(
@@ -253,11 +276,11 @@ void bind_control(py::module_& m) {
             return std::make_pair(ok, reason);
           },
           py::arg("tau"), "Applies tau for one control period: (True, \"\"), or (False, why the simulation failed).")
-      .def("q", [](const mj::Plant& p) -> Vector { return p.q(); })
-      .def("v", [](const mj::Plant& p) -> Vector { return p.v(); })
-      .def("time", &mj::Plant::time)
-      .def("contact_steps", &mj::Plant::contact_steps)
-      .def("max_contact_force", &mj::Plant::max_contact_force);
+      .def_property_readonly("q", [](const mj::Plant& p) -> Vector { return p.q(); })
+      .def_property_readonly("v", [](const mj::Plant& p) -> Vector { return p.v(); })
+      .def_property_readonly("time", &mj::Plant::time)
+      .def_property_readonly("contact_steps", &mj::Plant::contact_steps)
+      .def_property_readonly("max_contact_force", &mj::Plant::max_contact_force);
 
   py::class_<mj::TaskRun>(m, "TaskRun",
                           "A task on its MuJoCo model, ready to run: the plant and the controller built as the "

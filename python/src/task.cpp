@@ -14,7 +14,7 @@ namespace {
 
 Task task_from_dict(const py::handle& d, const Task* base) {
   nlohmann::json j;
-  const std::string text = json_dumps(d);
+  const std::string text = json_dumps(d, "task dict");
   try {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {
@@ -70,7 +70,7 @@ void bind_task(py::module_& m) {
           "reference", [](const Task& t) { return json_loads(t.reference.dump()); },
           [](Task& t, const py::handle& d) {
             try {
-              t.reference = nlohmann::json::parse(json_dumps(d));
+              t.reference = nlohmann::json::parse(json_dumps(d, "reference"));
             } catch (const nlohmann::json::exception& e) {
               throw std::invalid_argument(std::string("reference: expected JSON, got a parse error: ") + e.what());
             }

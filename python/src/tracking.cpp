@@ -76,7 +76,7 @@ std::vector<double> times_of(const std::vector<double>& times, const RowSamples&
 std::shared_ptr<Trajectory> trajectory_from_dict(const py::handle& d, const Vector& start, const std::string& base_dir,
                                                  const std::string& where) {
   nlohmann::json j;
-  const std::string text = json_dumps(d);
+  const std::string text = json_dumps(d, where);
   try {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::exception& e) {

@@ -64,8 +64,8 @@ def test_task_run_accessors():
     run = idmpc.TaskRun(short_paper_task())
     assert run.n == 4 and run.model.n == 4 and run.model.joint_names == ["joint0", "joint1", "joint2", "joint3"]
     np.testing.assert_array_equal(run.q0, [-np.pi, 0, 0, 0])
-    assert run.controller.n() == 4 and run.controller.dt() == 1e-3
-    assert run.plant.nv() == 4
+    assert run.controller.n == 4 and run.controller.dt == 1e-3
+    assert run.plant.nv == 4
     assert run.torque_lower.shape == run.torque_upper.shape == (4,)
     assert isinstance(run.notices, list) and isinstance(run.warnings, list)
     assert run.task.duration == DURATION
@@ -78,22 +78,22 @@ def python_loop(run):
     step update at t from the measured state, apply the torque of the previous update for one
     period and take the new one."""
     plant, controller = run.plant, run.controller
-    dt = controller.dt()
+    dt = controller.dt
     steps = int(np.floor(run.task.duration / dt + 0.5))
     plant.reset(run.q0, np.zeros(run.n))
-    tau = controller.initialize(plant.q(), plant.v())
-    assert controller.failure() == ""
+    tau = controller.initialize(plant.q, plant.v)
+    assert controller.failure == ""
     updates = 0
     for k in range(steps):
-        if not controller.update(k * dt, plant.q(), plant.v()):
+        if not controller.update(k * dt, plant.q, plant.v):
             break
         updates += 1
         ok, reason = plant.step(tau)
         assert ok, reason
-        if np.abs(plant.v()).max() > MAX_SPEED:
+        if np.abs(plant.v).max() > MAX_SPEED:
             break
-        tau = controller.torque()
-    return updates, np.abs(plant.q() - controller.q_ref()).max()
+        tau = controller.torque
+    return updates, np.abs(plant.q - controller.q_ref).max()
 
 
 def short_reach_task(formulation):
@@ -151,9 +151,9 @@ def test_controller_and_plant_keep_their_run_alive():
     plant = idmpc.TaskRun(short_paper_task()).plant
     gc.collect()
     plant.reset([-np.pi, 0, 0, 0], np.zeros(4))
-    tau = controller.initialize(plant.q(), plant.v())
+    tau = controller.initialize(plant.q, plant.v)
     assert plant.step(tau) == (True, "")
-    assert plant.time() == pytest.approx(controller.dt())
+    assert plant.time == pytest.approx(controller.dt)
 
 
 def test_runs_in_threads_equal_the_serial_run():
@@ -199,15 +199,15 @@ def test_controller_from_settings():
     q, v = np.array([-0.5, 0, 0, 0]), np.zeros(4)
     tau = controller.initialize(q, v)
     assert tau.shape == (4,) and np.all(np.isfinite(tau))
-    assert controller.update(0.0, q, v) and controller.failure() == ""
+    assert controller.update(0.0, q, v) and controller.failure == ""
     # the same controller with exact products takes the same step to rounding
     settings.cgmres.products = "exact"
     exact = idmpc.Controller(idmpc.load_model(str(MJCF / "arm4.xml")), settings)
     np.testing.assert_allclose(exact.initialize(q, v), tau, rtol=1e-9, atol=1e-9)
     assert exact.update(0.0, q, v)
-    np.testing.assert_allclose(exact.torque(), controller.torque(), rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(exact.torque, controller.torque, rtol=1e-5, atol=1e-6)
     controller.set_target(np.full(4, 0.1))
-    np.testing.assert_array_equal(controller.q_ref(), np.full(4, 0.1))
+    np.testing.assert_array_equal(controller.q_ref, np.full(4, 0.1))
     with pytest.raises(ValueError, match="update: q has 3 entries, expected n = 4"):
         controller.update(0.0, q[:3], v)
 

@@ -277,7 +277,7 @@ def test_qref_q0_from_a_dict():
     task = idmpc.task_from_dict({"model": str(MJCF / "ur5e.xml"), "q0": "home", "qref": "q0", "duration": 0.01})
     assert task.qref_start
     run = idmpc.TaskRun(task)
-    np.testing.assert_array_equal(run.controller.q_ref(), run.q0)
+    np.testing.assert_array_equal(run.controller.q_ref, run.q0)
     assert run.frame_target is None and run.reference is None
 
 
@@ -333,17 +333,17 @@ def test_controller_settings_frame_target_drives_a_python_loop(circle_run):
     np.testing.assert_array_equal(settings.frame_target.position, run.frame_target.position)
     controller = idmpc.Controller(run.model, settings)
     plant, frame, reference = run.plant, run.frame("tip"), run.reference
-    dt = controller.dt()
+    dt = controller.dt
     plant.reset(run.q0, np.zeros(n))
-    tau = controller.initialize(plant.q(), plant.v())
+    tau = controller.initialize(plant.q, plant.v)
     errors = []
     for k in range(int(round(TRACKING_DURATION / dt))):
         t = k * dt
-        assert controller.update(t, plant.q(), plant.v()), controller.failure()
-        errors.append(np.linalg.norm(idmpc.frame_kinematics(run.model, frame, plant.q())[0] - reference.sample(t)[0]))
+        assert controller.update(t, plant.q, plant.v), controller.failure
+        errors.append(np.linalg.norm(idmpc.frame_kinematics(run.model, frame, plant.q)[0] - reference.sample(t)[0]))
         ok, reason = plant.step(tau)
         assert ok, reason
-        tau = controller.torque()
+        tau = controller.torque
     # 0.2 mm as the task's own run; without the frame reference (the target held at the start): 5.8 mm
     assert np.sqrt(np.mean(np.square(errors))) < 1e-3
 
@@ -351,17 +351,17 @@ def test_controller_settings_frame_target_drives_a_python_loop(circle_run):
 def test_controller_set_frame_target():
     run = idmpc.TaskRun(short_circle_task())
     controller = run.controller
-    target = controller.frame_target()
+    target = controller.frame_target
     np.testing.assert_array_equal(target.position, run.frame_target.position)
     p = target.position + [0.0, 0.0, 0.01]
     R = run.frame_target.rotation @ rot_y(0.1)
     controller.set_frame_target(p, R)
-    np.testing.assert_array_equal(controller.frame_target().position, p)
-    np.testing.assert_allclose(controller.frame_target().rotation, R, atol=0)
+    np.testing.assert_array_equal(controller.frame_target.position, p)
+    np.testing.assert_allclose(controller.frame_target.rotation, R, atol=0)
     with pytest.raises(ValueError, match="rotation is not a rotation matrix"):
         controller.set_frame_target(p, 2 * R)
     joint_only = idmpc.TaskRun(idmpc.paper_task()).controller
-    assert joint_only.frame_target() is None
+    assert joint_only.frame_target is None
     with pytest.raises(ValueError, match="no frame target"):
         joint_only.set_frame_target(p, R)
 
@@ -375,4 +375,4 @@ def test_frame_reference_without_a_frame_target_is_a_value_error(arm4):
         idmpc.Controller(arm4, settings)
     settings.frame_reference = None
     settings.joint_reference = idmpc.ConstantTrajectory(np.zeros(4))
-    assert idmpc.Controller(arm4, settings).n() == 4
+    assert idmpc.Controller(arm4, settings).n == 4

@@ -2,11 +2,13 @@
 // the paper's.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <regex>
@@ -183,8 +185,35 @@ Task cell_task(const Task& base, const Cell& c, const SweepOptions& opt) {
   return task;
 }
 
+// the list of strings `key` of a JSON object read from `path`, refused in one line naming the
+// file and the field (not the JSON library's words)
+std::vector<std::string> strings_field(const nlohmann::json& j, const char* key, const std::string& path,
+                                       const std::string& items, const std::string& what = "") {
+  const std::string expected = "'" + path + "': field '" + key + "': expected a list of " + items;
+  if (!j.is_object()) throw std::invalid_argument("'" + path + "': expected a JSON object with the field '" + key + "'" + what);
+  if (!j.contains(key)) throw std::invalid_argument("'" + path + "': missing field '" + key + "' (a list of " + items + ")" + what);
+  const nlohmann::json& v = j.at(key);
+  if (!v.is_array()) throw std::invalid_argument(expected + ", got " + abbreviate(v.dump()) + what);
+  std::vector<std::string> out;
+  for (const nlohmann::json& x : v) {
+    if (!x.is_string()) throw std::invalid_argument(expected + ", got the entry " + abbreviate(x.dump()) + what);
+    out.push_back(x.get<std::string>());
+  }
+  return out;
+}
+
+// one key per file however its path is spelled (./a.json, d/../a.json, a link): the canonical
+// path of an existing file, else the path made absolute and normal
+std::string same_file_key(const std::filesystem::path& p) {
+  std::error_code ec;
+  const std::filesystem::path canonical = std::filesystem::weakly_canonical(p, ec);
+  if (!ec) return canonical.string();
+  return std::filesystem::absolute(p, ec).lexically_normal().string();
+}
+
 // the task files of the arms table's list ({"tasks": [files relative to the list]}), each once
 std::vector<std::string> arm_tasks(const SweepOptions& opt) {
+  namespace fs = std::filesystem;
   const std::string path = arms_list(opt);
   const std::string what = opt.arms_tasks.empty() ? " (the list of real-arm tasks; see --models and --arms-tasks)"
                                                   : " (--arms-tasks)";
@@ -194,20 +223,20 @@ std::vector<std::string> arm_tasks(const SweepOptions& opt) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(e.what() + what);
   }
-  std::vector<std::string> tasks;
-  try {
-    tasks = list.at("tasks").get<std::vector<std::string>>();
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument("'" + path + "': expected {\"tasks\": [task files]}" + what + ", " + e.what());
-  }
+  const std::vector<std::string> tasks = strings_field(list, "tasks", path, "task files, relative to the list", what);
   if (tasks.empty()) throw std::invalid_argument("'" + path + "' lists no task" + what);
+  std::vector<std::string> files;  // each task's file, however the list spells it
   for (size_t k = 0; k < tasks.size(); ++k) {
     if (tasks[k].empty() || tasks[k].find_first_of(",\r\n") != std::string::npos) {
       throw std::invalid_argument("'" + path + "' lists the task file name '" + abbreviate(tasks[k]) +
                                   "', empty or with a comma or line break (it names a CSV row)" + what);
     }
-    if (std::find(tasks.begin(), tasks.begin() + k, tasks[k]) != tasks.begin() + k) {
-      throw std::invalid_argument("'" + path + "' lists '" + abbreviate(tasks[k]) + "' twice" + what);
+    files.push_back(same_file_key(fs::path(path).parent_path() / tasks[k]));
+    const auto earlier = std::find(files.begin(), files.end() - 1, files.back());
+    if (earlier != files.end() - 1) {
+      const std::string first = tasks[static_cast<size_t>(earlier - files.begin())];
+      throw std::invalid_argument("'" + path + "' lists '" + abbreviate(tasks[k]) + "' twice" +
+                                  (first == tasks[k] ? "" : " (also as '" + abbreviate(first) + "')") + what);
     }
   }
   return tasks;
@@ -238,6 +267,8 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
 
 // the work-precision grid's list (mjcf/work_precision.json of the models directory): the runs
 // (the paper's models, then task files) and the kmax values
+// kmax as an int holds it (the GMRES basis bounds it further, for each model)
+constexpr std::int64_t kMaxKmax = std::numeric_limits<int>::max();
 struct WorkPrecisionGrid {
   std::vector<std::string> runs;
   std::vector<int> kmax;
@@ -246,25 +277,38 @@ WorkPrecisionGrid work_precision_grid(const SweepOptions& opt) {
   const std::string path = in_models(opt, "work_precision.json");
   const nlohmann::json j = read_json_file(path, "work-precision grid");
   WorkPrecisionGrid g;
-  try {
-    for (const char* key : {"models", "tasks"}) {
-      for (const std::string& x : j.at(key).get<std::vector<std::string>>()) g.runs.push_back(x);
-    }
-    g.kmax = j.at("kmax").get<std::vector<int>>();
-  } catch (const nlohmann::json::exception& e) {
-    throw std::invalid_argument("'" + path + "': expected {\"models\": [model files], \"tasks\": [task files], "
-                                "\"kmax\": [integers]}, " + e.what());
+  for (const char* key : {"models", "tasks"}) {
+    for (const std::string& x : strings_field(j, key, path, std::string(key) + " files")) g.runs.push_back(x);
   }
-  for (const std::string& x : g.runs) {
+  if (!j.contains("kmax")) throw std::invalid_argument("'" + path + "': missing field 'kmax' (a list of integers)");
+  const nlohmann::json& kmax = j.at("kmax");
+  const std::string expected = "'" + path + "': field 'kmax': expected a list of integers from 1 to " +
+                               std::to_string(kMaxKmax);
+  if (!kmax.is_array()) throw std::invalid_argument(expected + ", got " + abbreviate(kmax.dump()));
+  for (const nlohmann::json& k : kmax) {
+    // the JSON integer itself, never wrapped to int (4294967306 is not 10)
+    const bool in_range = k.is_number_unsigned() ? k.get<std::uint64_t>() >= 1 && k.get<std::uint64_t>() <= static_cast<std::uint64_t>(kMaxKmax)
+                          : k.is_number_integer() ? k.get<std::int64_t>() >= 1 && k.get<std::int64_t>() <= kMaxKmax
+                                                  : false;
+    if (!in_range) throw std::invalid_argument(expected + ", got the entry " + abbreviate(k.dump()));
+    const int value = static_cast<int>(k.get<std::int64_t>());
+    if (std::find(g.kmax.begin(), g.kmax.end(), value) != g.kmax.end()) {
+      throw std::invalid_argument("'" + path + "': field 'kmax' lists " + std::to_string(value) + " twice");
+    }
+    g.kmax.push_back(value);
+  }
+  for (size_t k = 0; k < g.runs.size(); ++k) {
+    const std::string& x = g.runs[k];
     if (x.empty() || x.find_first_of(",\r\n") != std::string::npos) {
       throw std::invalid_argument("'" + path + "' lists the file name '" + abbreviate(x) +
                                   "', empty or with a comma or line break (it names a CSV row)");
     }
+    if (std::find(g.runs.begin(), g.runs.begin() + static_cast<std::ptrdiff_t>(k), x) !=
+        g.runs.begin() + static_cast<std::ptrdiff_t>(k)) {
+      throw std::invalid_argument("'" + path + "' lists '" + abbreviate(x) + "' twice");
+    }
   }
   if (g.runs.empty() || g.kmax.empty()) throw std::invalid_argument("'" + path + "' lists no run or no kmax");
-  for (int k : g.kmax) {
-    if (k < 1) throw std::invalid_argument("'" + path + "' lists kmax " + std::to_string(k) + ": expected >= 1");
-  }
   return g;
 }
 
@@ -472,7 +516,12 @@ std::string csv_row(const PaperTables& tables, const CellResult& r) {
 // another format or with cells of other settings is refused, never overwritten.
 std::map<std::string, CellResult> read_finished(const std::string& path, const std::vector<Cell>& cells) {
   std::map<std::string, CellResult> done;
-  std::ifstream in(path);
+  std::error_code ec;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(path, ec)) && !std::filesystem::exists(path, ec)) {
+    return done;
+  }
+  // a regular file of bounded size: a FIFO, a device or a directory in its place is refused
+  std::istringstream in(read_input_file(path, "sweep results", "a CSV file of sweep results"));
   std::string line;
   auto next = [&] {
     if (!std::getline(in, line)) return false;
@@ -1091,19 +1140,21 @@ std::string markdown_with_latency(const PaperTables& tables, const std::vector<C
   return tables_md + latency_markdown(opt, cells, done);
 }
 
+// the file name of a cell's --logs log in the output directory
+std::string log_name(const Cell& c) {
+  // the model or task file without its extension, a listed task's directories joined by '_'
+  std::string name = std::filesystem::path(c.model).replace_extension().string();
+  std::replace(name.begin(), name.end(), '/', '_');
+  return "log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
+         (c.shooting == "single" ? "" : "_" + c.shooting) + (c.products == "difference" ? "" : "_" + c.products) +
+         "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) +
+         (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
+         (c.latency == "none" ? "" : "_latency_" + c.latency) + ".csv";
+}
+
 CellResult run_cell(const Task& base, const Cell& c, const SweepOptions& opt) {
   const Task task = cell_task(base, c, opt);
-  std::string log;
-  if (opt.logs) {
-    // the model or task file without its extension, a listed task's directories joined by '_'
-    std::string name = std::filesystem::path(c.model).replace_extension().string();
-    std::replace(name.begin(), name.end(), '/', '_');
-    log = opt.out_dir + "/log_" + c.table + "_" + name + "_" + c.formulation + "_" + c.derivatives +
-          (c.shooting == "single" ? "" : "_" + c.shooting) + (c.products == "difference" ? "" : "_" + c.products) +
-          "_N" + std::to_string(c.N) + "_k" + std::to_string(c.kmax) +
-          (task_table(c.table) ? (c.offset_free ? "_offset_on" : "_offset_off") : "") +
-          (c.latency == "none" ? "" : "_latency_" + c.latency) + ".csv";
-  }
+  const std::string log = opt.logs ? opt.out_dir + "/" + log_name(c) : std::string();
   // the paper's rule: ID that fails with Q_a = 0 is rerun with the task's fallback Q_a
   const RunSummary s = run_swingup(task, log, true).summary;
   CellResult r;
@@ -1279,6 +1330,12 @@ void run_serial(const SweepOptions& opt) {
   std::cout << markdown_with_latency(s.tables, s.cells, done, opt) << "\nwritten: " << s.md << ", " << s.csv << "\n";
 }
 
+// `text` matched literally in a std::regex
+std::string regex_escaped(const std::string& text) {
+  static const std::regex special(R"([.^$|()\[\]{}*+?\\])");
+  return std::regex_replace(text, special, R"(\$&)");
+}
+
 // the cell a run names by its ID
 const Cell& cell_named(const Sweep& s, const std::string& id) {
   for (const Cell& c : s.cells) {
@@ -1312,18 +1369,23 @@ void run_one_cell(const SweepOptions& opt, const std::string& id) {
   const Cell& c = cell_named(s, id);
   check_cell(s, c);
   const std::string record = cell_record_path(opt.out_dir, id);
-  fs::create_directories(fs::path(record).parent_path());
+  // the lock first: a cell refused beside a serial sweep or a merge makes nothing
+  fs::create_directories(opt.out_dir);
   const OutputDirectoryLock lock(opt.out_dir, OutputDirectoryLock::Mode::shared);
-  std::fprintf(stderr, "[cell %s] %s: ", id.c_str(), cell_label(c).c_str());
+  const std::string progress = "[cell " + id + "] " + cell_label(c) + ": ";
   if (read_record(s, c)) {
-    std::fprintf(stderr, "done earlier\n");
+    std::fprintf(stderr, "%sdone earlier\n", progress.c_str());
     return;
   }
-  // the temporaries of this cell's record that a killed run of it left (other cells may be
-  // writing theirs beside them)
+  fs::create_directories(fs::path(record).parent_path());
+  // the temporaries of this cell's record and log that a killed run of it left (other cells may
+  // be writing theirs beside them)
   remove_stale_temporaries(fs::path(record).parent_path().string(),
                            std::regex("\\." + id + "\\.csv\\.tmp\\.([0-9]+)\\.[0-9]+"));
+  if (opt.logs) remove_stale_temporaries(opt.out_dir, std::regex(regex_escaped("." + log_name(c)) + R"(\.tmp\.([0-9]+)\.[0-9]+)"));
   AtomicFile f(record);  // an unwritable directory fails before the run
+  // the progress line once nothing but the run can fail: an error before it has a line of its own
+  std::fprintf(stderr, "%s", progress.c_str());
   const CellResult r = run_cell_after_progress(s.base, c, opt);
   f.stream() << csv_header() << '\n' << csv_row(s.tables, r) << '\n';
   f.commit();
@@ -1355,7 +1417,9 @@ void merge(const SweepOptions& opt) {
   // the temporaries killed runs left: of the tables, and of the records of cells that ran again
   static const std::regex table_temporaries(R"(\.(?:sweep|arms|tracking|work_precision)\.(?:csv|md)\.tmp\.([0-9]+)\.[0-9]+)");
   static const std::regex record_temporaries(R"(\.[0-9a-f]{16}\.csv\.tmp\.([0-9]+)\.[0-9]+)");
+  static const std::regex log_temporaries(R"(\.log_.*\.tmp\.([0-9]+)\.[0-9]+)");
   remove_stale_temporaries(opt.out_dir, table_temporaries);
+  remove_stale_temporaries(opt.out_dir, log_temporaries);
   remove_stale_temporaries(opt.out_dir + "/cells", record_temporaries);
   read_finished(s.csv, s.cells);  // a table of another sweep is refused, never overwritten
   write_csv(s, done);
@@ -1387,7 +1451,8 @@ void register_sweep(CLI::App& app) {
       sub->add_option("--arms-tasks", opt->arms_tasks,
                       "the tasks of --tables arms or tracking (arms implied when --tables is not given): a JSON "
                       "file {\"description\": ..., \"tasks\": [task files, relative to it]} like mjcf/arms.json, "
-                      "the default (arms.json or tracking.json of --models)");
+                      "the default (arms.json or tracking.json of --models)")
+          ->check(non_empty_path());
   sub->add_option("--offset-free", opt->offset_free,
                   "arms: offset-free tracking (the disturbance observer) as each task sets it (task), on, off, or "
                   "both: every task with it on and off, side by side")

@@ -10,6 +10,7 @@
 
 #include "app/atomic_file.hpp"
 #include "app/number_options.hpp"
+#include "idmpc/experiment/input_file.hpp"
 #include "idmpc/mujoco/task_run.hpp"
 
 namespace idmpc::app {
@@ -23,6 +24,16 @@ CLI::Validator latency_check() {
         } catch (const std::invalid_argument& e) {
           return e.what();
         }
+      },
+      "");
+}
+
+// true or false, nothing CLI11 would also read as a bool ("" and "-1" as false, "on", "yes", "1")
+CLI::Validator true_or_false() {
+  return CLI::Validator(
+      [](std::string& value) -> std::string {
+        if (value == "true" || value == "false") return "";
+        return "expected true or false, got '" + abbreviate(value) + "'";
       },
       "");
 }
@@ -53,7 +64,8 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_option("--h", t.h, "forward-difference increment of the Frechet products"),
       [](const Task& s, Task& d) { d.h = s.h; });
   add(sub.add_option("--init-full-horizon", t.init_full_horizon,
-                     "true: solve the full-horizon problem at t = 0 before the loop (with --alpha 0)"),
+                     "true: solve the full-horizon problem at t = 0 before the loop (with --alpha 0)")
+          ->check(true_or_false()),
       [](const Task& s, Task& d) { d.init_full_horizon = s.init_full_horizon; });
   add(sub.add_option("--shooting", t.shooting,
                      "single (rollout from the measured state) or multiple (states and costates as unknowns, "
@@ -95,7 +107,8 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
                      "eps of the horizon's smooth friction f*tanh(v/eps): scalar or one per joint (default: auto)"),
       [](const Task& s, Task& d) { d.friction_velocity = s.friction_velocity; });
   add(sub.add_option("--offset-free", t.offset_free,
-                     "true: estimate the torque the model misses (disturbance observer) and add it to the horizon"),
+                     "true: estimate the torque the model misses (disturbance observer) and add it to the horizon")
+          ->check(true_or_false()),
       [](const Task& s, Task& d) { d.offset_free = s.offset_free; });
   add(sub.add_option("--observer-time-constant", t.observer_time_constant,
                      "time constant of the disturbance observer's filter [s]"),

@@ -244,13 +244,13 @@ TEST(TrajectoryFromJson, CircleNeedsAPosition) {
   EXPECT_EQ(json_error(R"({"shape": "circle", "radius": -1, "frequency": 0.5})", kStart),
             kWhere + ": field 'radius': expected a positive number [m], got -1");
   EXPECT_EQ(json_error(R"({"shape": "circle", "radius": 1, "frequency": "fast"})", kStart),
-            kWhere + ": field 'frequency': expected a positive number [Hz], got \"fast\"");
+            kWhere + ": field 'frequency': expected a positive number [Hz] of at most 1e+06, got \"fast\"");
   EXPECT_EQ(json_error(R"({"shape": "circle", "radius": 1, "frequency": 1, "normal": [0, 0, 0]})", kStart),
             kWhere + ": field 'normal': expected a non-zero list of 3 numbers (the plane's normal), got [0,0,0]");
   EXPECT_EQ(json_error(R"({"shape": "circle", "radius": 1, "frequency": 1, "center": [0, 0]})", kStart),
             kWhere + ": field 'center': expected a list of 3 numbers (x, y, z [m]), got [0,0]");
   EXPECT_EQ(json_error(R"({"shape": "circle", "radius": 1, "frequency": 1, "ramp": -0.5})", kStart),
-            kWhere + ": field 'ramp': expected a non-negative number [s], got -0.5");
+            kWhere + ": field 'ramp': expected a non-negative number [s] of at most 1e+09, got -0.5");
 }
 
 TEST(TrajectoryFromJson, LineRunsFromTheStartAfterItsDelay) {

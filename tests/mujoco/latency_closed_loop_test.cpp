@@ -106,10 +106,11 @@ TEST_P(FixedLatency, DelaysTheTorqueByWholePlantSteps) {
 }
 
 // the paper's timing is a latency of one period: none and any fixed latency up to Δt (one plant
-// step here) run the same loop to the last bit, the observer included
+// step here; 0 included: a torque never acts at its own measurement's instant) run the same loop
+// to the last bit, the observer included
 TEST_P(FixedLatency, NoneIsALatencyOfOnePeriod) {
   const LoopRun none = run(reach(GetParam(), "none"));
-  for (const char* latency : {"0.25", "1"}) {
+  for (const char* latency : {"0", "0.25", "1"}) {
     const LoopRun late = run(reach(GetParam(), latency));
     ASSERT_EQ(late.rows.size(), none.rows.size());
     for (size_t j = 0; j < none.rows.size(); ++j) {
@@ -119,6 +120,20 @@ TEST_P(FixedLatency, NoneIsALatencyOfOnePeriod) {
     }
     EXPECT_EQ(late.result.deadline_misses, 0);
     EXPECT_EQ(late.result.final_q, none.result.final_q);
+  }
+}
+
+// a compute time longer than the run: no update's torque arrives, the plant holds the
+// initialization's torque throughout, and the controller stays busy after its first update; the
+// same for compute times beyond the range of the plant-step counter (1e19 ms and more)
+TEST_P(FixedLatency, BeyondTheRunNoTorqueArrives) {
+  for (const char* latency : {"100", "1e19", "1e300"}) {
+    SCOPED_TRACE(std::string(latency) + " ms, " + GetParam());
+    const LoopRun r = run(reach(GetParam(), latency));
+    ASSERT_EQ(static_cast<long>(r.rows.size()), std::lround(kDuration / 1e-3));
+    for (const Row& row : r.rows) ASSERT_EQ(row.u, r.rows.front().u) << "t = " << row.t;
+    EXPECT_EQ(r.result.updates, 1);
+    EXPECT_EQ(r.result.deadline_misses, 1);
   }
 }
 

@@ -375,6 +375,108 @@ nlohmann::json to_json(const RunSummary& s) {
   return j;
 }
 
+namespace {
+
+// what a field of a run summary holds
+enum class Kind { kNumber, kNumberOrNull, kInteger, kBool, kString, kNumbers, kNumbersOrNulls, kIntegers, kStrings };
+
+bool is(const nlohmann::json& v, Kind kind) {
+  auto all = [&v](auto&& test) { return v.is_array() && std::all_of(v.begin(), v.end(), test); };
+  switch (kind) {
+    case Kind::kNumber: return v.is_number();
+    case Kind::kNumberOrNull: return v.is_number() || v.is_null();
+    case Kind::kInteger: return v.is_number_integer();
+    case Kind::kBool: return v.is_boolean();
+    case Kind::kString: return v.is_string();
+    case Kind::kNumbers: return all([](const nlohmann::json& x) { return x.is_number(); });
+    case Kind::kNumbersOrNulls: return all([](const nlohmann::json& x) { return x.is_number() || x.is_null(); });
+    case Kind::kIntegers: return all([](const nlohmann::json& x) { return x.is_number_integer(); });
+    case Kind::kStrings: return all([](const nlohmann::json& x) { return x.is_string(); });
+  }
+  return false;
+}
+
+const char* expected(Kind kind) {
+  switch (kind) {
+    case Kind::kNumber: return "a number";
+    case Kind::kNumberOrNull: return "a number or null";
+    case Kind::kInteger: return "an integer";
+    case Kind::kBool: return "true or false";
+    case Kind::kString: return "a string";
+    case Kind::kNumbers: return "a list of numbers";
+    case Kind::kNumbersOrNulls: return "a list of numbers or nulls";
+    case Kind::kIntegers: return "a list of integers";
+    case Kind::kStrings: return "a list of strings";
+  }
+  return "";
+}
+
+// every field summary_from_json reads, with what it must hold: "a.b" is checked when the object
+// "a" is there; a required field must be there (in its object); checked before any is read, so
+// that the reader's errors name the field instead of quoting the JSON library
+struct SummaryField {
+  const char* path;
+  Kind kind;
+  bool required;
+};
+constexpr SummaryField kSummaryFields[] = {
+    {"n", Kind::kInteger, true}, {"simd_stages", Kind::kBool, true}, {"zeta", Kind::kNumber, true},
+    {"steps", Kind::kInteger, true}, {"diverged", Kind::kBool, true}, {"diverged_at", Kind::kNumberOrNull, false},
+    {"divergence_reason", Kind::kString, true}, {"divergence_hint", Kind::kString, false},
+    {"mean_update_ms", Kind::kNumber, true}, {"p50_update_ms", Kind::kNumberOrNull, true},
+    {"p95_update_ms", Kind::kNumberOrNull, true}, {"max_update_ms", Kind::kNumberOrNull, true},
+    {"phase_ms.rollout", Kind::kNumber, true}, {"phase_ms.costate", Kind::kNumber, true},
+    {"phase_ms.gmres", Kind::kNumber, true}, {"evaluations_per_update", Kind::kInteger, true},
+    {"init_residual", Kind::kNumber, true}, {"final_q_error", Kind::kNumber, true},
+    {"final_v_norm", Kind::kNumber, true}, {"mean_residual", Kind::kNumber, true},
+    {"reached", Kind::kBool, false}, {"tracking.position_rms", Kind::kNumber, true},
+    {"tracking.position_max", Kind::kNumber, true}, {"tracking.orientation_rms", Kind::kNumber, true},
+    {"tracking.orientation_max", Kind::kNumber, true}, {"tracking.final_position_error", Kind::kNumber, true},
+    {"tracking.samples", Kind::kInteger, true}, {"latency.control_period_ms", Kind::kNumber, true},
+    {"latency.updates", Kind::kInteger, true}, {"latency.deadline_misses", Kind::kInteger, true},
+    {"joint_error_rms", Kind::kNumber, false}, {"contact_steps", Kind::kInteger, false},
+    {"max_contact_force", Kind::kNumber, false}, {"final_disturbance", Kind::kNumbers, false},
+    {"implicit_damping", Kind::kBool, false}, {"friction_velocity", Kind::kNumbers, false},
+    {"weights.Qq", Kind::kNumbers, true}, {"weights.Qv", Kind::kNumbers, true}, {"weights.R", Kind::kNumbers, true},
+    {"unbounded_joints", Kind::kStrings, false}, {"unmodeled", Kind::kStrings, true},
+    {"notices", Kind::kStrings, false}, {"warnings", Kind::kStrings, true},
+    {"torque_lower", Kind::kNumbersOrNulls, true}, {"torque_upper", Kind::kNumbersOrNulls, true},
+    {"saturated_steps", Kind::kIntegers, true}, {"saturated_any", Kind::kInteger, true},
+    {"max_constraint_violation", Kind::kNumberOrNull, false}, {"model_hash", Kind::kString, false},
+    {"log_hash", Kind::kString, false}};
+
+void check_summary_fields(const nlohmann::json& j, const std::string& where) {
+  for (const SummaryField& f : kSummaryFields) {
+    const std::string path = f.path;
+    const std::size_t dot = path.find('.');
+    const nlohmann::json* object = &j;
+    if (dot != std::string::npos) {
+      const std::string parent = path.substr(0, dot);
+      if (!j.contains(parent)) continue;
+      if (!j.at(parent).is_object()) {
+        throw std::runtime_error(where + ": field '" + parent + "': expected an object, got " + abbreviate(j.at(parent).dump()));
+      }
+      object = &j.at(parent);
+    }
+    const std::string key = dot == std::string::npos ? path : path.substr(dot + 1);
+    if (!object->contains(key)) {
+      if (f.required) throw std::runtime_error(where + ": missing field '" + path + "' (" + expected(f.kind) + ")");
+      continue;
+    }
+    const nlohmann::json& v = object->at(key);
+    if (!is(v, f.kind)) {
+      throw std::runtime_error(where + ": field '" + path + "': expected " + expected(f.kind) + ", got " +
+                               abbreviate(v.dump()));
+    }
+  }
+  if (j.at("diverged").get<bool>() && !(j.contains("diverged_at") && j.at("diverged_at").is_number())) {
+    throw std::runtime_error(where + ": field 'diverged_at': expected a number (the run diverged), got " +
+                             (j.contains("diverged_at") ? abbreviate(j.at("diverged_at").dump()) : std::string("none")));
+  }
+}
+
+}  // namespace
+
 RunSummary summary_from_json(const nlohmann::json& j, const std::string& source) {
   const std::string where = "run summary '" + source + "'";
   if (!j.is_object() || !j.contains("schema") || !j.at("schema").is_number_integer()) {
@@ -384,6 +486,8 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     throw std::runtime_error(where + ": schema " + j.at("schema").dump() + ", this idmpc reads schema " +
                              std::to_string(kRunRecordSchema));
   }
+  check_summary_fields(j, where);
+  if (!j.contains("task")) throw std::runtime_error(where + ": missing field 'task' (the task as run)");
   RunSummary s;
   try {
     try {
@@ -459,8 +563,9 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     if (j.contains("max_constraint_violation")) s.max_constraint_violation = number("max_constraint_violation");
     if (j.contains("model_hash")) s.model_hash = j.at("model_hash").get<std::string>();
     if (j.contains("log_hash")) s.log_hash = j.at("log_hash").get<std::string>();
-  } catch (const nlohmann::json::exception& e) {
-    throw std::runtime_error(where + ": missing or mistyped field (" + e.what() + ")");
+  } catch (const nlohmann::json::exception&) {
+    // check_summary_fields names every field read above: a field it does not know
+    throw std::runtime_error(where + ": a field of an unexpected type (not an idmpc run summary of this version?)");
   }
   return s;
 }

@@ -425,6 +425,24 @@ ResolvedTask resolve(const Task& t, int n) {
   if (t.target) {
     // the frame target's own values (its frame and "start" pose need the model: mj::TaskRun)
     const FrameTask& f = *t.target;
+    if (f.frame.empty()) throw std::invalid_argument("target.frame: expected a site or body name, got an empty name");
+    if (f.frame.find('\0') != std::string::npos) {
+      throw std::invalid_argument("target.frame: expected a site or body name, got one with a NUL byte: '" +
+                                  abbreviate(f.frame.substr(0, f.frame.find('\0'))) + "\\0…'");
+    }
+    auto sized = [](const std::vector<double>& x, std::initializer_list<std::size_t> sizes, const char* name,
+                    const char* expected) {
+      if (std::find(sizes.begin(), sizes.end(), x.size()) != sizes.end()) return;
+      throw std::invalid_argument(std::string(name) + " has " + std::to_string(x.size()) + " values, expected " +
+                                  expected);
+    };
+    sized(f.position, {0, 3}, "target.position", "3 ([x, y, z]) or none (the frame's position at q0)");
+    sized(f.orientation, {0, 4}, "target.orientation", "4 ([w, x, y, z]) or none (the frame's orientation at q0)");
+    sized(f.position_weight, {1, 3}, "target.weights.position", "1 or 3");
+    finite(Eigen::Map<const VecX<double>>(f.position.data(), static_cast<Eigen::Index>(f.position.size())),
+           "target.position");
+    finite(Eigen::Map<const VecX<double>>(f.orientation.data(), static_cast<Eigen::Index>(f.orientation.size())),
+           "target.orientation");
     std::vector<double> w = f.position_weight;
     w.push_back(f.orientation_weight);
     non_negative(Eigen::Map<const VecX<double>>(w.data(), static_cast<Eigen::Index>(w.size())),

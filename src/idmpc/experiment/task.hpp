@@ -67,6 +67,7 @@
 #include "idmpc/experiment/latency.hpp"
 #include "idmpc/ocp/problem.hpp"
 #include "idmpc/solver/cgmres.hpp"
+#include "idmpc/solver/controller.hpp"
 #include "idmpc/solver/riccati.hpp"
 
 namespace idmpc {
@@ -136,10 +137,9 @@ const Task& arm_defaults();
 
 nlohmann::json to_json(const Task& task);
 
-/// @brief The largest horizon (N) a task may ask for: far above any useful setting (the paper's
-/// largest is 50), and small enough that the controller's stage workspace, sized from it, fits
-/// in memory (kmax is bounded where the GMRES basis is sized: Gmres::checked).
-inline constexpr int kMaxHorizonSteps = 10000;
+/// @brief The largest horizon (N) a task may ask for: the controller's (kMaxHorizonStages; kmax
+/// is bounded where the GMRES basis is sized: Gmres::checked).
+inline constexpr int kMaxHorizonSteps = kMaxHorizonStages;
 
 /// @brief A task made concrete for a model with n joints: validated vectors and settings.
 struct ResolvedTask {

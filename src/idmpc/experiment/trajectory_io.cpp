@@ -117,10 +117,13 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start) {
   }
   const double r = f.number("radius", "a positive number [m]", true);
   if (!(r > 0)) f.bad("radius", "a positive number [m]");
-  const double freq = f.number("frequency", "a positive number [Hz]", true);
-  if (!(freq > 0)) f.bad("frequency", "a positive number [Hz]");
-  const double ramp = f.number("ramp", "a non-negative number [s]", false, 1.0);
-  if (!(ramp >= 0)) f.bad("ramp", "a non-negative number [s]");
+  const std::string frequency = "a positive number [Hz] of at most " + text(CircleTrajectory::kMaxFrequency);
+  const double freq = f.number("frequency", frequency, true);
+  if (!(freq > 0) || freq > CircleTrajectory::kMaxFrequency) f.bad("frequency", frequency);
+  const std::string ramp_expected = "a non-negative number [s] of at most " + text(CircleTrajectory::kMaxRamp);
+  const double ramp = f.number("ramp", ramp_expected, false, 1.0);
+  if (!(ramp >= 0) || ramp > CircleTrajectory::kMaxRamp) f.bad("ramp", ramp_expected);
+  if (!std::isfinite(2 * M_PI * freq * r)) f.bad("radius", "a radius whose speed 2 pi frequency radius is finite [m]");
   Vec3<double> n = Vec3<double>::UnitX();
   if (f.j.contains("normal") && f.j.at("normal") == "facing") {
     // a vertical plane facing the base at the world origin: the normal along the start's
@@ -162,7 +165,11 @@ std::unique_ptr<Trajectory> line(const Fields& f, const VecX<double>& start) {
   if (!(delay >= 0)) f.bad("delay", "a non-negative number [s]");
   MatX<double> P(dim, 2);
   P << start, to;
-  return std::make_unique<WaypointTrajectory>(std::vector<double>{delay, delay + duration}, std::move(P));
+  try {
+    return std::make_unique<WaypointTrajectory>(std::vector<double>{delay, delay + duration}, std::move(P));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(f.where + ": field 'duration': " + e.what());
+  }
 }
 
 std::unique_ptr<Trajectory> waypoints(const Fields& f, const VecX<double>& start) {
@@ -197,7 +204,11 @@ std::unique_ptr<Trajectory> waypoints(const Fields& f, const VecX<double>& start
   }
   MatX<double> P(dim, static_cast<Eigen::Index>(values.size()));
   for (std::size_t k = 0; k < values.size(); ++k) P.col(static_cast<Eigen::Index>(k)) = values[k];
-  return std::make_unique<WaypointTrajectory>(std::move(t), std::move(P));
+  try {
+    return std::make_unique<WaypointTrajectory>(std::move(t), std::move(P));
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(f.where + ": field 'points': " + e.what());
+  }
 }
 
 std::unique_ptr<Trajectory> csv(const Fields& f, const VecX<double>& start, const std::string& base_dir) {
@@ -270,6 +281,18 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
         values.push_back(x);
       }
     }
+    if (t.size() >= 2) {
+      // the rate from the previous row: it must not overflow (times 1e-310 s apart)
+      const double h = t.back() - t[t.size() - 2];
+      const double* now = values.data() + values.size() - static_cast<std::size_t>(dim);
+      bool finite_rate = std::isfinite(4 / h);
+      for (int i = 0; i < dim && finite_rate; ++i) finite_rate = std::isfinite(4 * ((now[i] - now[i - dim]) / h));
+      if (!finite_rate) {
+        throw std::invalid_argument(at + ", column 1: expected a time far enough after " + text(t[t.size() - 2]) +
+                                    " s on line " + std::to_string(previous_line) +
+                                    " for a finite rate between the rows, got '" + abbreviate(fields[0]) + "'");
+      }
+    }
     previous_line = number;
   }
   if (t.size() < 2) {
@@ -279,8 +302,29 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
   return SampledTrajectory(std::move(t), std::move(P));
 }
 
+namespace {
+
+std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, const VecX<double>& start,
+                                     const std::string& base_dir);
+
+}  // namespace
+
 std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::string& where, const VecX<double>& start,
                                                  const std::string& base_dir) {
+  try {
+    return shape_of(j, where, start, base_dir);
+  } catch (const std::invalid_argument& e) {
+    // the trajectories' own checks name neither the file nor the field: prefixed once
+    const std::string what = e.what();
+    if (what.rfind(where, 0) == 0) throw;
+    throw std::invalid_argument(where + ": " + what);
+  }
+}
+
+namespace {
+
+std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, const VecX<double>& start,
+                                     const std::string& base_dir) {
   if (start.size() < 1) throw std::invalid_argument(where + ": the reference's start value is empty (dim 0)");
   if (!start.allFinite()) throw std::invalid_argument(where + ": the reference's start value is not finite");
   if (!j.is_object()) {
@@ -297,5 +341,7 @@ std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::strin
   if (shape == "csv") return csv(f, start, base_dir);
   f.bad("shape", shapes);
 }
+
+}  // namespace
 
 }  // namespace idmpc

@@ -11,7 +11,8 @@
 /// IDMPC_DEBUG_CHECK(condition, message): a precondition that costs real work to check (that
 /// data holds the passes of another kernel at this very (q, v)), checked in debug builds (no
 /// NDEBUG, or IDMPC_DEBUG_CHECKS=1: the sanitizer build) and compiled out otherwise. A failed
-/// check prints the message with its place and aborts, like assert.
+/// check prints the message with its place and aborts, like assert; a program that must not
+/// abort (the Python module) sets detail::debug_check_handler, which throws instead.
 
 #include <cstdio>
 #include <cstdlib>
@@ -27,10 +28,17 @@
 
 namespace idmpc::detail {
 
+/// @brief Called with the failed check's text ("<file>:<line>: idmpc debug check failed:
+/// <message> (<condition>)") instead of aborting, when set; it must throw (if it returns, the
+/// process aborts as without it). Set once, before any check can run.
+inline void (*debug_check_handler)(const char* text) = nullptr;
+
 [[noreturn]] inline void debug_check_failed(const char* condition, const char* message,
                                             const char* file, int line) {
-  std::fprintf(stderr, "%s:%d: idmpc debug check failed: %s (%s)\n", file, line, message,
-               condition);
+  char text[1024];
+  std::snprintf(text, sizeof text, "%s:%d: idmpc debug check failed: %s (%s)", file, line, message, condition);
+  if (debug_check_handler != nullptr) debug_check_handler(text);
+  std::fprintf(stderr, "%s\n", text);
   std::abort();
 }
 

@@ -209,18 +209,19 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
       if (ok && compute_ms > period_ms) ++result.deadline_misses;
       if (ok && late) {
         // its torque reaches the plant after the whole plant steps its computation took
+        // at least one plant step (a torque never acts at its own measurement's instant: a compute
+        // time of 0 runs as the paper's timing), and one after the run's end when it would arrive
+        // later (1e19 ms and more do not fit a long)
         const double ratio = 1e-3 * compute_ms / plant_dt;
-        const long delay = std::max(0L, static_cast<long>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio))));
+        const long never = steps * substeps + 1;
+        const long delay = !(ratio < static_cast<double>(never))
+                               ? never
+                               : std::max(1L, static_cast<long>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio))));
         free_at = k + std::max(1L, (delay + substeps - 1) / substeps);
         ok = controller.aim(dt * (static_cast<double>(delay) / static_cast<double>(substeps)));
         pending = controller.torque();
         pending_cmd = controller.commanded_torque();
         arrival = first + delay;
-        if (delay == 0) {
-          tau = pending;
-          tau_cmd = pending_cmd;
-          arrival = -1;
-        }
         last_update = k;
         applied_steps = 0;
       }

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "idmpc/experiment/input_file.hpp"
 #include "idmpc/mujoco/load.hpp"
 
 namespace idmpc::mj {
@@ -499,6 +500,14 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
 Frame import_frame(const mjModel* m, const std::string& name, const std::string& source) {
   require_one_dof_joints(m, source);
   require_finite(m, source);
+  // MuJoCo matches the text up to a NUL byte, and "" names every unnamed site and body
+  if (name.empty()) {
+    throw std::invalid_argument("model '" + source + "': expected a site or body name, got an empty name");
+  }
+  if (name.find('\0') != std::string::npos) {
+    throw std::invalid_argument("model '" + source + "': expected a site or body name, got '" +
+                                abbreviate(name.substr(0, name.find('\0'))) + "' followed by a NUL byte");
+  }
   const int site = mj_name2id(m, mjOBJ_SITE, name.c_str());
   const int body = site >= 0 ? m->site_bodyid[site] : mj_name2id(m, mjOBJ_BODY, name.c_str());
   if (body < 0) {
@@ -507,18 +516,19 @@ Frame import_frame(const mjModel* m, const std::string& name, const std::string&
       const char* site_name = mj_id2name(m, mjOBJ_SITE, s);
       if (site_name && site_name[0]) sites += (sites.empty() ? "" : ", ") + std::string(site_name);
     }
-    throw std::invalid_argument("model '" + source + "' has no site or body '" + name + "' (" +
-                                (sites.empty() ? std::string("it has no named sites") : "sites: " + sites) + ")");
+    throw std::invalid_argument("model '" + source + "' has no site or body '" + abbreviate(name) + "' (" +
+                                (sites.empty() ? std::string("it has no named sites") : "sites: " + abbreviate(sites, 200)) +
+                                ")");
   }
   const LinkTree tree = link_tree(m, source);
   Frame frame;
   frame.link = tree.link_of_body[body];
   frame.placement = tree.body_in_link[body];
   if (site < 0) {
-    frame.name = "body '" + name + "'";
+    frame.name = "body '" + abbreviate(name) + "'";
     return frame;
   }
-  frame.name = "site '" + name + "'";
+  frame.name = "site '" + abbreviate(name) + "'";
   if (!finite(m->site_pos + 3 * site, 3) || !finite(m->site_quat + 4 * site, 4)) {
     throw std::invalid_argument(frame.name + " in '" + source + "' has a non-finite placement (pos " +
                                 numbers(m->site_pos + 3 * site, 3) + ", quat " + numbers(m->site_quat + 4 * site, 4) +

@@ -110,6 +110,12 @@ void TaskRun::set_up_references() {
     const mjModel* m = loaded_.model.get();
     FrameTarget target;
     target.frame = import_frame(m, f.frame, task.model);
+    if (target.frame.link < 0) {
+      // no joint moves it: its error is whatever it is at q0, "reached" or not whatever the controller does
+      throw std::invalid_argument(where + ", 'target': " + target.frame.name +
+                                  " is fixed to the world (the world body, or a body welded to it): no joint moves "
+                                  "it, expected a frame on a moving link");
+    }
     if (f.position_weight.size() == 1) {
       target.position_weight.setConstant(f.position_weight[0]);
     } else {

@@ -49,6 +49,20 @@ void check_values(const std::string& kind, const std::vector<double>& t, const M
   }
 }
 
+// the slope of every segment well within range: times so close (1e-310 s apart) or values so far apart
+// that a rate overflows are refused (their samples would be NaN)
+void check_slopes(const std::string& kind, const std::vector<double>& t, const MatX<double>& P) {
+  for (std::size_t k = 0; k + 1 < t.size(); ++k) {
+    const double h = t[k + 1] - t[k];
+    const auto i = static_cast<Eigen::Index>(k);
+    // 4: room for the interpolants' rates, a few slopes at most
+    if (!std::isfinite(4 / h) || !(4 * ((P.col(i + 1) - P.col(i)) / h)).allFinite()) {
+      bad(kind, "t[" + std::to_string(k) + "] = " + text(t[k]) + " and t[" + std::to_string(k + 1) + "] = " +
+                    text(t[k + 1]) + " are too close for their values: the rate between them overflows");
+    }
+  }
+}
+
 void check_times(const std::string& kind, const std::vector<double>& t, std::size_t min_count) {
   if (t.size() < min_count) {
     bad(kind, "expected at least " + std::to_string(min_count) + " times, got " + std::to_string(t.size()));
@@ -101,6 +115,12 @@ CircleTrajectory::CircleTrajectory(const Vec3<double>& center, const Vec3<double
   if (!(r_ > 0) || !std::isfinite(r_)) bad(kind, "radius must be finite and positive, got " + text(r_));
   if (!(f_ > 0) || !std::isfinite(f_)) bad(kind, "frequency must be finite and positive, got " + text(f_));
   if (!(ramp_ >= 0) || !std::isfinite(ramp_)) bad(kind, "ramp must be finite and non-negative, got " + text(ramp_));
+  // beyond these the phase or the speed overflows: NaN samples
+  if (f_ > kMaxFrequency) bad(kind, "frequency must be at most " + text(kMaxFrequency) + " Hz, got " + text(f_));
+  if (ramp_ > kMaxRamp) bad(kind, "ramp must be at most " + text(kMaxRamp) + " s, got " + text(ramp_));
+  if (!std::isfinite(kTwoPi * f_ * r_)) {
+    bad(kind, "the speed 2 pi frequency radius must be finite, got radius " + text(r_) + " m at " + text(f_) + " Hz");
+  }
   if (std::abs(n_.norm() - 1) > kUnitTolerance) bad(kind, "normal must be a unit vector, got " + text(n_));
   if (std::abs(e1_.norm() - 1) > kUnitTolerance) bad(kind, "start direction e1 must be a unit vector, got " + text(e1_));
   if (std::abs(n_.dot(e1_)) > kUnitTolerance) {
@@ -149,6 +169,7 @@ WaypointTrajectory::WaypointTrajectory(std::vector<double> times, MatX<double> v
     : t_(std::move(times)), P_(std::move(values)) {
   check_times("waypoints", t_, 1);
   check_values("waypoints", t_, P_);
+  check_slopes("waypoints", t_, P_);
 }
 
 std::unique_ptr<Trajectory> WaypointTrajectory::clone() const { return std::make_unique<WaypointTrajectory>(*this); }
@@ -187,6 +208,7 @@ SampledTrajectory::SampledTrajectory(std::vector<double> times, MatX<double> val
     : t_(std::move(times)), P_(std::move(values)) {
   check_times("sampled trajectory", t_, 2);
   check_values("sampled trajectory", t_, P_);
+  check_slopes("sampled trajectory", t_, P_);
   // Catmull-Rom tangents: the secant over both neighbours inside, one-sided at the ends
   const Eigen::Index K = P_.cols();
   m_.resize(P_.rows(), K);

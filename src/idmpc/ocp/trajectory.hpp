@@ -53,11 +53,14 @@ class CircleTrajectory final : public Trajectory {
  public:
   /// @param center c; @param normal n, the plane's unit normal; @param radius r > 0 [m];
   /// @param frequency f > 0 [Hz]; @param e1 unit start direction, ⟂ n; @param ramp ≥ 0 [s].
-  /// Unit and ⟂ within kUnitTolerance; everything finite.
+  /// Unit and ⟂ within kUnitTolerance; everything finite; f ≤ kMaxFrequency, ramp ≤ kMaxRamp
+  /// and the speed 2π f r finite, so that every sample is finite.
   CircleTrajectory(const Vec3<double>& center, const Vec3<double>& normal, double radius, double frequency,
                    const Vec3<double>& e1, double ramp);
   /// how far from 1 a unit vector's norm, and from 0 the cosine between n and e1, may be
   static constexpr double kUnitTolerance = 1e-9;
+  /// the largest frequency [Hz] (a thousand times a fast control rate) and ramp [s] (30 years)
+  static constexpr double kMaxFrequency = 1e6, kMaxRamp = 1e9;
 
   std::unique_ptr<Trajectory> clone() const override;
   int dim() const override { return 3; }

@@ -15,6 +15,7 @@ namespace {
 
 // the horizon's problem of `settings` for the plant model `model`, its sizes checked
 OcpProblem make_problem(const std::shared_ptr<const Model>& model, const ControllerSettings& s) {
+  validate(s);
   if (!model) throw std::invalid_argument("controller: no model given");
   std::shared_ptr<const Model> horizon = s.horizon_model ? s.horizon_model : model;
   const int n = model->n;
@@ -59,6 +60,14 @@ std::unique_ptr<MpcSolver> make_solver(OcpProblem problem, const ControllerSetti
 }
 
 }  // namespace
+
+void validate(const ControllerSettings& s) {
+  // bounded before anything is sized from it
+  if (s.N < 1 || s.N > kMaxHorizonStages) {
+    throw std::invalid_argument("controller settings: N must be from 1 to " + std::to_string(kMaxHorizonStages) +
+                                " horizon stages, got " + std::to_string(s.N));
+  }
+}
 
 Controller::Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings)
     : Controller(make_solver(make_problem(model, settings), settings), model) {

@@ -63,6 +63,14 @@ struct ControllerSettings {
   std::shared_ptr<const Model> horizon_model;
 };
 
+/// @brief The largest horizon (N) a controller takes: far above any useful setting (the paper's
+/// largest is 50), and small enough that the stage workspace, sized from it, fits in memory.
+inline constexpr int kMaxHorizonStages = 10000;
+
+/// @brief Throws std::invalid_argument naming the setting unless the settings' scalars can size a
+/// controller: N from 1 to kMaxHorizonStages. Controller's constructor calls it first.
+void validate(const ControllerSettings& settings);
+
 class Controller {
  public:
   using Vec = VecX<double>;
