@@ -13,26 +13,16 @@ final joint error or the tracking RMS, whether the target was reached, and deadl
 import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import tempfile
+
+from report import cpu_model
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 DEFAULT_TASKS = ["paper_swingup", "panda_reach", "ur5e_reach", "iiwa14_reach", "panda_circle"]
 VARIANTS = [("cgmres", "matrix"), ("cgmres", "adjoint"), ("riccati", "matrix")]
-
-
-def cpu_model():
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
 
 
 def run(idmpc, task, solver, formulation, derivatives, duration, workdir):
