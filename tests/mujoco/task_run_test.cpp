@@ -43,7 +43,8 @@ TEST(ControllerSettings, TheControllerSharesItsModel) {
 }
 
 // one set of limits: the horizon's constraints on every bounded joint and the clamp of the
-// returned torque; a clamp that differs from the horizon's bounds is refused, naming the joint
+// returned torque; a clamp beyond the horizon's bounds is refused, naming the joint, a tighter
+// one taken
 TEST(ControllerSettings, LimitsAreGivenOnceForTheHorizonAndTheClamp) {
   auto model = std::make_shared<const Model>(test::load_problem(kArm4).model);
   ControllerSettings s = arm4_settings(4);
@@ -59,10 +60,22 @@ TEST(ControllerSettings, LimitsAreGivenOnceForTheHorizonAndTheClamp) {
   other[1] = 30;
   try {
     c.set_torque_limits(s.torque_lower, other);
-    FAIL() << "a clamp other than the horizon's bounds was accepted";
+    FAIL() << "a clamp beyond the horizon's bounds was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("joint 'joint1'"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("horizon"), std::string::npos) << e.what();
+  }
+  // a tighter clamp is taken (an actuator derated while running), and every torque respects it
+  VecX<double> tighter = s.torque_upper;
+  tighter[1] = 5;
+  c.set_torque_limits(s.torque_lower, tighter);
+  EXPECT_EQ(c.torque_upper()[1], 5);
+  VecX<double> q = VecX<double>::Zero(4);
+  q[0] = -M_PI;
+  c.initialize(q, VecX<double>::Zero(4));
+  for (int k = 1; k <= 20; ++k) {
+    ASSERT_TRUE(c.update(k * c.dt(), q, VecX<double>::Zero(4))) << c.failure();
+    EXPECT_LE(c.torque()[1], 5.0);
   }
   // the unconstrained horizon keeps the clamp only
   s.limits_in_horizon = false;

@@ -144,15 +144,15 @@ void Controller::check_and_set_clamp(const Vec& lower, const Vec& upper, bool ma
     }
   }
   if (match_horizon) {
-    // one set of limits: where the horizon bounds a joint, the clamp is the same range
+    // where the horizon bounds a joint, the clamp lies within its range (the same, or tighter)
     const TorqueBounds& b = problem().torque_bounds();
     for (int k = 0; k < b.m(); ++k) {
       const int j = b.joints()[static_cast<size_t>(k)];
       const double lo = b.middle()[k] - b.half_range()[k], hi = b.middle()[k] + b.half_range()[k];
       const double tol = 1e-12 * std::max(1.0, std::max(std::abs(lo), std::abs(hi)));
-      if (std::abs(lower[j] - lo) > tol || std::abs(upper[j] - hi) > tol) {
+      if (lower[j] < lo - tol || upper[j] > hi + tol) {
         throw std::invalid_argument("torque limits of joint " + joint(j) + ": [" + std::to_string(lower[j]) + ", " +
-                                    std::to_string(upper[j]) + "] differ from the horizon's bounds [" +
+                                    std::to_string(upper[j]) + "] reach beyond the horizon's bounds [" +
                                     std::to_string(lo) + ", " + std::to_string(hi) + "]");
       }
     }

@@ -134,8 +134,10 @@ class Controller {
   bool aim(double delay);
 
   /// @brief Actuator limits: every torque the controller returns lies in [lower, upper]
-  /// (±infinity: unbounded). Throws std::invalid_argument for sizes other than n, NaN,
-  /// lower ≥ upper, or a joint the horizon bounds (OcpProblem's torque limits) with other limits.
+  /// (±infinity: unbounded). May tighten the clamp within the horizon's bounds at any time (an
+  /// actuator derated while running); throws std::invalid_argument for sizes other than n, NaN,
+  /// lower ≥ upper, or a joint the horizon bounds (OcpProblem's torque limits) with limits
+  /// beyond those bounds.
   void set_torque_limits(const Vec& lower, const Vec& upper);
 
   /// @brief A new target q_ref from the next update on (the torque reference ID(q_ref, 0, 0)
