@@ -19,7 +19,7 @@
 #include "app/temporary_files.hpp"
 
 #ifndef IDMPC_VERSION
-#define IDMPC_VERSION "0.1.0"  // keep in step with project(VERSION) in CMakeLists.txt
+#error "IDMPC_VERSION comes from src/CMakeLists.txt: the project's version"
 #endif
 
 namespace {
