@@ -105,7 +105,7 @@ void RiccatiSolver::set_inputs(const MatX<double>& U) {
 }
 
 void RiccatiSolver::linearize(double t) {
-  const int n = this->n(), N = this->N(), m = static_cast<int>(joint_.size());
+  const int N = this->N(), m = static_cast<int>(joint_.size());
   const double h = dtau();
   problem_.set_stage_times(t, h);
   const StageTerms& terms = problem_.terms();
@@ -143,7 +143,6 @@ void RiccatiSolver::linearize(double t) {
     lmd_.swap(lmd_next_);
   }
   kkt_ = std::sqrt(sum);
-  (void)n;
 }
 
 bool RiccatiSolver::backward(double eps) {
@@ -400,7 +399,6 @@ double RiccatiSolver::initialize(double t, In q, In v) {
   if (!check_finite()) throw std::runtime_error("riccati start: " + failure_);
   u0_ = U_.col(0);
   violation_ = violation();
-  t_ = t;
   times_.total = seconds_since(t0);
   return kkt_;
 }
@@ -431,7 +429,6 @@ bool RiccatiSolver::update(double t, In q, In v) {
     if (settings_.tolerance > 0 && kkt < settings_.tolerance) break;
   }
   kkt_ = kkt_first_;
-  t_ = t;
   times_.total = seconds_since(t0);
   return true;
 }

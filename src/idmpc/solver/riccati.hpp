@@ -152,7 +152,6 @@ class RiccatiSolver final : public MpcSolver {
   Vec u0_;
   Data hold_;              ///< RNEA of the start's holding torque
   bool rolled_out_ = false;  ///< whether the states are a trajectory of the inputs (else: roll out first)
-  double t_ = 0;
   double kkt_ = 0, kkt_first_ = 0, violation_ = 0, regularization_ = 0;
   int iterations_ = 0, evaluations_ = 0;
   bool timing_ = false;
