@@ -83,6 +83,20 @@ TEST_F(InputFileTest, DeepJsonIsRefusedNamingTheFileAndTheDepth) {
   EXPECT_THROW(parse_json(std::string(65, '[') + std::string(65, ']'), "x"), std::invalid_argument);
 }
 
+// The parser alone would keep the last of two equal keys; a file that gives a field twice is
+// refused, naming the field by its enclosing objects
+TEST_F(InputFileTest, AKeyGivenTwiceInOneObjectIsRefusedNamingIt) {
+  const std::string path = write("twice.json", R"({"duration": 1, "weights": {"Qq": 1, "R": 2, "Qq": 3}})");
+  EXPECT_EQ(error_of([&] { read_json_file(path, "task file"); }),
+            "task file '" + path + "': key \"weights.Qq\" appears twice in one object; give it once");
+  EXPECT_NE(error_of([&] { load_task(path); }).find("\"weights.Qq\" appears twice"), std::string::npos);
+  EXPECT_EQ(error_of([&] { parse_json(R"({"a": 1, "a": 1})", "x"); }), "x: key \"a\" appears twice in one object; give it once");
+  EXPECT_EQ(error_of([&] { parse_json(R"({"r": {"points": [{"t": 0}, {"t": 1, "t": 2}]}})", "x"); }),
+            "x: key \"r.points[].t\" appears twice in one object; give it once");
+  // the same key in different objects, or as a string value, is fine
+  EXPECT_NO_THROW(parse_json(R"({"a": {"a": 1}, "b": [{"a": 1}, {"a": 2}], "c": "a"})", "x"));
+}
+
 TEST_F(InputFileTest, ValuesEchoedIntoErrorsAreAbbreviated) {
   const std::string wide = "[\"" + std::string(100000, 'a') + "\"]";
   for (const std::string& text : {R"({"qref": [)" + wide + "]}", R"({"q0": {"a": )" + wide + "}}",

@@ -1,6 +1,8 @@
 #include "idmpc/experiment/input_file.hpp"
 
 #include <algorithm>
+#include <set>
+#include <vector>
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -115,8 +117,39 @@ nlohmann::json parse_json(const std::string& text, const std::string& where) {
                                 " levels deep (line " + std::to_string(first_too_deep) + "), expected at most " +
                                 std::to_string(kMaxJsonDepth));
   }
+  // A key given twice in one object is refused (the parser would keep the last silently): the
+  // enclosing objects' keys name where, e.g. "weights.Qq"
+  using Event = nlohmann::json::parse_event_t;
+  struct Level {
+    bool object;
+    std::string path;  ///< "" at the top, "weights", "reference.points[]", ...
+    std::set<std::string> keys;
+  };
+  std::vector<Level> levels;
+  std::string key;
+  const auto check_keys = [&](int /*depth*/, Event event, nlohmann::json& parsed) {
+    if (event == Event::object_start || event == Event::array_start) {
+      std::string path;
+      if (!levels.empty()) {
+        const Level& parent = levels.back();
+        path = !parent.object ? parent.path + "[]" : parent.path.empty() ? key : parent.path + "." + key;
+      }
+      levels.push_back({event == Event::object_start, std::move(path), {}});
+    } else if (event == Event::object_end || event == Event::array_end) {
+      levels.pop_back();
+    } else if (event == Event::key) {
+      key = parsed.get<std::string>();
+      Level& level = levels.back();
+      if (!level.keys.insert(key).second) {
+        const std::string path = level.path.empty() ? key : level.path + "." + key;
+        throw std::invalid_argument(where + ": key \"" + abbreviate(path, 100) +
+                                    "\" appears twice in one object; give it once");
+      }
+    }
+    return true;
+  };
   try {
-    return nlohmann::json::parse(text);
+    return nlohmann::json::parse(text, check_keys);
   } catch (const nlohmann::json::exception& e) {
     // the parser quotes what it last read, which may be a whole long token
     throw std::invalid_argument(where + ": expected JSON, got a parse error: " + abbreviate(e.what(), 200));

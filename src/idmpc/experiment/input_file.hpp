@@ -52,7 +52,8 @@ std::string read_input_file(const std::string& path, const std::string& noun, co
 
 /// @brief JSON text parsed with its nesting bounded by kMaxJsonDepth (checked before parsing, so
 /// that neither the parser nor the code walking the value recurses deeper); throws
-/// std::invalid_argument "<where>: …" for a parse error or deeper nesting.
+/// std::invalid_argument "<where>: …" for a parse error, deeper nesting or a key given twice in
+/// one object.
 nlohmann::json parse_json(const std::string& text, const std::string& where);
 
 /// @brief read_input_file (a JSON file) and parse_json; messages name "<noun> '<path>'".

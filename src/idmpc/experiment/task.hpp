@@ -7,7 +7,7 @@
 ///
 /// Task file fields (all optional in a user's file: missing ones come from the defaults for real
 /// arms, arm_defaults(), documented with their reasons in docs/tasks.md; the paper's swing-up names
-/// every field itself; unknown fields are an error):
+/// every field itself; unknown fields, and a field given twice, are an error):
 ///   "model"        path of the MJCF/URDF file, relative to the task file's directory
 ///   "q0"           initial joint positions, one per joint, "swingup" = (−π, 0, …, 0) or
 ///                  "home" = the model's keyframe named home
