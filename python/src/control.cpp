@@ -53,9 +53,34 @@ py::array_t<double> to_array(const std::vector<double>& x, size_t columns = 0) {
 // (KeyboardInterrupt) is set, and raised once the GIL is back
 struct Interrupted {};
 
-// how often the closed loop lets Python handle its signals: a step of a long run takes a
-// fraction of a millisecond, taking the GIL every step would cost more than the step
+// how often a long call lets Python handle its signals: a step of a long run takes a fraction
+// of a millisecond, taking the GIL every step would cost more than the step
 constexpr auto kSignalCheckPeriod = std::chrono::milliseconds(50);
+
+// While it lives (the GIL released): poll() lets Python handle its signals every
+// kSignalCheckPeriod, and the controller's start polls between its iterations; a signal whose
+// handler raises (Ctrl-C: KeyboardInterrupt) throws Interrupted out of the call
+class SignalPolling {
+ public:
+  explicit SignalPolling(Controller& controller) : controller_(controller) {
+    controller_.set_interrupt_check([this] { poll(); });
+  }
+  SignalPolling(const SignalPolling&) = delete;
+  SignalPolling& operator=(const SignalPolling&) = delete;
+  ~SignalPolling() { controller_.set_interrupt_check({}); }
+
+  void poll() {
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next_check_) return;
+    next_check_ = now + kSignalCheckPeriod;
+    py::gil_scoped_acquire acquire;
+    if (PyErr_CheckSignals() != 0) throw Interrupted{};
+  }
+
+ private:
+  Controller& controller_;
+  std::chrono::steady_clock::time_point next_check_ = std::chrono::steady_clock::now() + kSignalCheckPeriod;
+};
 
 py::dict run_task_run(mj::TaskRun& run) {
   Rows rows;
@@ -64,14 +89,10 @@ py::dict run_task_run(mj::TaskRun& run) {
   RunSummary summary;
   try {
     py::gil_scoped_release release;
-    auto next_check = std::chrono::steady_clock::now() + kSignalCheckPeriod;
-    result = run.run([&rows, &next_check](const mj::StepRecord& s) {
+    SignalPolling signals(run.controller());
+    result = run.run([&rows, &signals](const mj::StepRecord& s) {
       rows.add(s);
-      const auto now = std::chrono::steady_clock::now();
-      if (now < next_check) return;
-      next_check = now + kSignalCheckPeriod;
-      py::gil_scoped_acquire acquire;
-      if (PyErr_CheckSignals() != 0) throw Interrupted{};
+      signals.poll();
     });
     summary = run.summary(result);
   } catch (const Interrupted&) {
@@ -207,11 +228,17 @@ void bind_control(py::module_& m) {
           [](Controller& c, const Vector& q, const Vector& v) -> Vector {
             check_size("initialize: q", q.size(), c.n());
             check_size("initialize: v", v.size(), c.n());
-            py::gil_scoped_release release;  // a full-horizon start may take seconds
-            return c.initialize(q, v);
+            try {
+              py::gil_scoped_release release;  // a full-horizon start may take seconds
+              SignalPolling signals(c);
+              return c.initialize(q, v);
+            } catch (const Interrupted&) {
+              throw py::error_already_set();  // KeyboardInterrupt for Ctrl-C
+            }
           },
           py::arg("q"), py::arg("v"),
-          "Zero-horizon initialization from the measured state; returns the torque for the first period.")
+          "Zero-horizon initialization from the measured state; returns the torque for the first period. "
+          "Ctrl-C interrupts a long start (KeyboardInterrupt); initialize again before updating.")
       .def(
           "update",
           [](Controller& c, double t, const Vector& q, const Vector& v) {

@@ -115,6 +115,26 @@ def test_ctrl_c_interrupts_a_long_run():
     assert time.monotonic() - start < 10
 
 
+def test_ctrl_c_interrupts_a_long_start():
+    # a start of 100,000 Riccati iterations on the Panda (tens of seconds): Controller.initialize,
+    # and the same start inside TaskRun.run, end at the signal
+    task = idmpc.load_task(str(MJCF / "panda_reach.json"))
+    task.solver = "riccati"
+    task.riccati.init_iterations = 100000
+    task.riccati.init_tolerance = 0
+    run = idmpc.TaskRun(task)
+    for call in (lambda: run.controller.initialize(run.q0, [0.0] * run.n), run.run):
+        timer = threading.Timer(0.5, _thread.interrupt_main)
+        start = time.monotonic()
+        timer.start()
+        try:
+            with pytest.raises(KeyboardInterrupt):
+                call()
+        finally:
+            timer.cancel()
+        assert time.monotonic() - start < 5
+
+
 def test_a_failed_debug_check_raises_instead_of_aborting():
     code, out = child("""
         import idmpc

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <random>
 #include <string>
 #include <tuple>
@@ -449,6 +450,41 @@ TEST(Controller, RefusesAStateOfTheWrongSize) {
   EXPECT_THROW(controller.update(0.001, x, short_x), std::invalid_argument);
   EXPECT_THROW(controller.solver().update(0.001, short_x, x), std::invalid_argument);
   EXPECT_TRUE(controller.update(0.001, x, x));
+}
+
+// The interrupt check runs between the start's iterations, in both solver families (a C/GMRES
+// start over the full horizon, the Riccati start): a check that throws abandons initialize with
+// its exception (not reported as a failed start), and a controller started again runs as usual
+TEST(Controller, AnInterruptCheckThatThrowsAbandonsTheStart) {
+  struct Stop {};
+  const test::Problem p = load_problem(kArm4);
+  const auto model = std::make_shared<const Model>(p.model);
+  const int n = model->n;
+  for (const SolverKind solver : {SolverKind::kCgmres, SolverKind::kRiccati}) {
+    SCOPED_TRACE(to_string(solver));
+    ControllerSettings s;
+    s.solver = solver;
+    s.N = 10;
+    s.cgmres.alpha = 0;  // the horizon open at t = 0: the full-horizon start iterates
+    s.cgmres.init_full_horizon = true;
+    s.weights = paper_weights(n, 1e-4);
+    s.q_ref = VecX<double>::Zero(n);
+    Controller controller(model, s);
+    VecX<double> q = VecX<double>::Zero(n);
+    q[0] = -0.5;
+    const VecX<double> v = VecX<double>::Zero(n);
+    int calls = 0;
+    controller.set_interrupt_check([&] {
+      if (++calls == 3) throw Stop{};
+    });
+    EXPECT_THROW(controller.initialize(q, v), Stop);
+    EXPECT_EQ(calls, 3);
+    controller.set_interrupt_check({});
+    controller.initialize(q, v);
+    EXPECT_EQ(controller.failure(), "");
+    EXPECT_TRUE(controller.update(s.cgmres.dt, q, v)) << controller.failure();
+    EXPECT_EQ(calls, 3) << "an empty check is not called";
+  }
 }
 
 }  // namespace

@@ -146,6 +146,7 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
     };
     double norm = 0;
     for (int it = 0; it <= settings_.init_iterations; ++it) {
+      if (interrupt_check_) interrupt_check_();
       F0 = F_head(x);
       norm = F0.norm();
       if (!std::isfinite(norm)) throw std::runtime_error("zero-horizon initialization: non-finite residual");
@@ -192,6 +193,7 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
   auto newton = [&](double Tk, bool polish = false) {
     double start = 0;
     for (int it = 0; it <= settings_.init_iterations; ++it) {
+      if (interrupt_check_) interrupt_check_();
       ocp_.residual(U_, q, v, Tk, F);
       norm = F.norm();
       if (it == 0) start = norm;

@@ -18,6 +18,7 @@
 /// per update than single shooting. With E = 0 and the stored trajectories those of the rollout,
 /// the two schemes take the same step.
 
+#include <functional>
 #include <string>
 
 #include "idmpc/solver/gmres.hpp"
@@ -118,6 +119,8 @@ class Cgmres {
   int evaluations() const { return evaluations_; }
   const UpdateTimes& last_times() const { return times_; }
   void enable_timing(bool on) { timing_ = on; ocp_.enable_timing(on); }
+  /// @brief Called before every Newton iteration of initialize (MpcSolver::set_interrupt_check).
+  void set_interrupt_check(std::function<void()> check) { interrupt_check_ = std::move(check); }
   const CgmresSettings& settings() const { return settings_; }
   const Shooting& ocp() const { return ocp_; }
   double horizon(double t) const { return horizon_.length(t); }
@@ -137,6 +140,7 @@ class Cgmres {
   Horizon horizon_;
   Gmres gmres_;
   bool timing_ = false;
+  std::function<void()> interrupt_check_;
   VecX<double> U_, Udot_, F_, Fx_, Fw_, Uw_, b_, qh_, vh_, a0_;
   ShootingTrajectory X_;    ///< multiple shooting: stored states and costates
   ShootingDefects E_, Eh_;  ///< their defects at the measured state, and (1 − hζ)E

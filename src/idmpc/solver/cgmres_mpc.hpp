@@ -37,6 +37,7 @@ class CgmresMpc final : public MpcSolver {
   int evaluations() const override { return cgmres_.evaluations(); }
   const UpdateTimes& last_times() const override { return cgmres_.last_times(); }
   void enable_timing(bool on) override { cgmres_.enable_timing(on); }
+  void set_interrupt_check(std::function<void()> check) override { cgmres_.set_interrupt_check(std::move(check)); }
 
   Shooting& shooting() { return shooting_; }
   const Shooting& shooting() const { return shooting_; }

@@ -17,6 +17,7 @@
 /// interval given to update) and τ⁻ the torque applied over [t − Δt, t) (known from the timing
 /// above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -132,6 +133,10 @@ class Controller {
   /// the delay, FD's u_0 has no prediction to move. torque() and commanded_torque() change
   /// (clamped as always); returns false with failure() for a non-finite torque.
   bool aim(double delay);
+
+  /// @brief A function initialize calls between the iterations of its start, which may throw to
+  /// abandon a long start (MpcSolver::set_interrupt_check); empty: none.
+  void set_interrupt_check(std::function<void()> check) { solver_->set_interrupt_check(std::move(check)); }
 
   /// @brief Actuator limits: every torque the controller returns lies in [lower, upper]
   /// (±infinity: unbounded). May tighten the clamp within the horizon's bounds at any time (an

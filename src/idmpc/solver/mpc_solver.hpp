@@ -6,6 +6,7 @@
 /// the Controller applies the torque rule to the first stage's input and never asks which
 /// solver it has.
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -62,6 +63,12 @@ class MpcSolver {
   virtual int evaluations() const = 0;
   virtual const UpdateTimes& last_times() const = 0;
   virtual void enable_timing(bool on) = 0;
+  /// @brief A function initialize calls between the iterations of its start, which may take
+  /// seconds (a full-horizon C/GMRES start on a long horizon, many Riccati start iterations):
+  /// it may throw to abandon the start (Ctrl-C in Python), and the exception leaves initialize
+  /// (initialize again before the next update). Throw something other than a
+  /// std::runtime_error, which initialize reports as a failed start. Empty: none.
+  virtual void set_interrupt_check(std::function<void()> check) = 0;
 };
 
 }  // namespace idmpc

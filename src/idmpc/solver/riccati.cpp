@@ -391,6 +391,7 @@ double RiccatiSolver::initialize(double t, In q, In v) {
   rolled_out_ = false;
   const auto t0 = Clock::now();
   for (int it = 0; it < settings_.init_iterations; ++it) {
+    if (interrupt_check_) interrupt_check_();
     const double kkt = iterate(t, q, v, true);
     if (!check_finite()) throw std::runtime_error("riccati start: " + failure_);
     if (kkt < settings_.init_tolerance) break;

@@ -25,6 +25,7 @@
 /// initialize converges from a hold-the-state guess. Regularization: Q_uu + εI with ε raised
 /// tenfold while a stage's Q_uu is not positive definite.
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -87,6 +88,7 @@ class RiccatiSolver final : public MpcSolver {
   int evaluations() const override { return evaluations_; }
   const UpdateTimes& last_times() const override { return times_; }
   void enable_timing(bool on) override { timing_ = on; }
+  void set_interrupt_check(std::function<void()> check) override { interrupt_check_ = std::move(check); }
 
   const RiccatiSettings& settings() const { return settings_; }
   double horizon() const { return Tf_; }
@@ -155,6 +157,7 @@ class RiccatiSolver final : public MpcSolver {
   double kkt_ = 0, kkt_first_ = 0, violation_ = 0, regularization_ = 0;
   int iterations_ = 0, evaluations_ = 0;
   bool timing_ = false;
+  std::function<void()> interrupt_check_;
   UpdateTimes times_;
   std::string failure_;
 };
