@@ -99,8 +99,8 @@ struct Case {
 // the paper's task (mjcf/paper_swingup.json) on an n-joint model, with Q_a and kmax set
 ResolvedTask paper_setup(int n, double Qa, int kmax) {
   ResolvedTask r = resolve(paper_task(), n);
-  r.weights.Qa.setConstant(Qa);
-  r.cgmres.kmax = kmax;
+  r.controller.weights.Qa.setConstant(Qa);
+  r.controller.cgmres.kmax = kmax;
   return r;
 }
 
@@ -127,9 +127,9 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   const VecX<double>& q0 = paper.q0;
   const VecX<double> v0 = VecX<double>::Zero(n);
   f.ocp = std::make_unique<Shooting>(f.bm->model(), c.controller.formulation, c.controller.mode,
-                                           paper.weights, paper.qref, c.N);
+                                           paper.controller.weights, paper.controller.q_ref, c.N);
   f.ocp->set_stage_batching(c.controller.simd_stages);
-  CgmresSettings settings = paper.cgmres;
+  CgmresSettings settings = paper.controller.cgmres;
   settings.shooting = c.controller.shooting;
   settings.products = c.controller.products;
   f.start = std::make_unique<Cgmres>(*f.ocp, settings);
@@ -279,7 +279,7 @@ void BM_Product(benchmark::State& state, Case c) {
 void BM_StageVectorOps(benchmark::State& state, int n) {
   constexpr int N = 25;
   const double dtau = 0.5 / N;
-  const OcpWeights w8 = paper_setup(n, 0.0, 10).weights;
+  const OcpWeights w8 = paper_setup(n, 0.0, 10).controller.weights;
   const VecX<double> q_ref = VecX<double>::Zero(n);
   VecX<double> U = VecX<double>::Random(N * n), F = VecX<double>::Zero(N * n);
   MatX<double> q = MatX<double>::Random(n, N + 1), v = MatX<double>::Random(n, N + 1);
@@ -337,11 +337,11 @@ RiccatiFixture& riccati_fixture(Formulation f, int n, int N) {
   const BenchModel& bm = bench_model(n);
   const ResolvedTask paper = paper_setup(n, 0.0, 10);
   const VecX<double> v0 = VecX<double>::Zero(n);
-  const OcpProblem problem(bm.model(), f, DerivativeMode::kMatrix, paper.weights, paper.qref, N);
-  RiccatiSolver solver(problem, paper.cgmres.Tf, paper.cgmres.dt, RiccatiSettings{});
+  const OcpProblem problem(bm.model(), f, DerivativeMode::kMatrix, paper.controller.weights, paper.controller.q_ref, N);
+  RiccatiSolver solver(problem, paper.controller.cgmres.Tf, paper.controller.cgmres.dt, RiccatiSettings{});
   solver.initialize(0.0, paper.q0, v0);
   fx.start.emplace(solver);
-  idmpc::Controller controller(std::make_unique<RiccatiSolver>(problem, paper.cgmres.Tf, paper.cgmres.dt,
+  idmpc::Controller controller(std::make_unique<RiccatiSolver>(problem, paper.controller.cgmres.Tf, paper.controller.cgmres.dt,
                                                                RiccatiSettings{}));
   mj::Plant plant(bm.m.get(), bm.imported.actuation);
   mj::ClosedLoopSettings loop;

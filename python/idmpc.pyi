@@ -252,7 +252,11 @@ class ControllerSettings:
     limits_in_horizon: bool
     observer_time_constant: float
     simd_stages: bool
-    horizon_model: Optional[Model]
+    q_start: Vector
+    friction_loss: Vector
+    friction_velocity: Vector
+    implicit_damping: str
+    plant_step: float
     def __init__(self) -> None: ...
 
 class Controller:
@@ -321,6 +325,8 @@ class TaskRun:
     def plant(self) -> Plant: ...
     @property
     def model(self) -> Model: ...
+    @property
+    def settings(self) -> ControllerSettings: ...
     @property
     def n(self) -> int: ...
     @property

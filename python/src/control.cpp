@@ -207,10 +207,19 @@ void bind_control(py::module_& m) {
       .def_readwrite("observer_time_constant", &ControllerSettings::observer_time_constant,
                      "disturbance observer [s]; 0: off")
       .def_readwrite("simd_stages", &ControllerSettings::simd_stages)
+      .def_readwrite("q_start", &ControllerSettings::q_start,
+                     "the start the automatic choices consider beside q_ref; empty: q_ref alone")
+      .def_readwrite("friction_loss", &ControllerSettings::friction_loss,
+                     "the plant's dry friction per joint, modelled as f*tanh(v/eps); empty: the model's own")
+      .def_readwrite("friction_velocity", &ControllerSettings::friction_velocity,
+                     "eps of the smooth friction per joint; empty: \"auto\"")
       .def_property(
-          "horizon_model", [](const ControllerSettings& s) { return mutable_model(s.horizon_model); },
-          [](ControllerSettings& s, std::shared_ptr<Model> model) { s.horizon_model = std::move(model); },
-          "the horizon's model when it differs from the controller's; None: the controller's");
+          "implicit_damping", [](const ControllerSettings& s) { return to_string(s.implicit_damping); },
+          [](ControllerSettings& s, const std::string& x) { s.implicit_damping = parse_implicit_damping(x); },
+          "joint damping over the horizon step: \"off\", \"on\" or \"auto\"")
+      .def_readwrite("plant_step", &ControllerSettings::plant_step,
+                     "the plant's integration step [s], over which the torque rule takes the damping implicitly; 0: "
+                     "explicit");
 
   py::class_<Controller>(m, "Controller",
                          "The NMPC controller: the problem (FD or ID formulation), C/GMRES and the torque rule. "
@@ -320,6 +329,10 @@ void bind_control(py::module_& m) {
       .def_property_readonly("plant", &mj::TaskRun::plant, py::return_value_policy::reference_internal)
       .def_property_readonly("model", [](const mj::TaskRun& r) { return mutable_model(r.shared_model()); },
                              "the imported model (the plant's joints, without friction)")
+      .def_property_readonly(
+          "settings", [](const mj::TaskRun& r) { return r.settings(); },
+          "the controller's settings (a copy): Controller(run.model, run.settings) is the controller this run "
+          "drives")
       .def_property_readonly("n", &mj::TaskRun::n)
       .def_property_readonly("q0", [](const mj::TaskRun& r) -> Vector { return r.q0(); })
       .def_property_readonly("torque_lower", [](const mj::TaskRun& r) -> Vector { return r.torque_lower(); })

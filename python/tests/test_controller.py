@@ -73,11 +73,11 @@ def test_task_run_accessors():
     assert run.task.duration == DURATION
 
 
-def python_loop(run):
+def python_loop(run, controller=None):
     """run_closed_loop (closed_loop.cpp) step by step: initialize at the measured x(0), then per
     step update at t from the measured state, apply the torque of the previous update for one
-    period and take the new one."""
-    plant, controller = run.plant, run.controller
+    period and take the new one. controller: the run's own unless given."""
+    plant, controller = run.plant, controller or run.controller
     dt = controller.dt
     steps = int(np.floor(run.task.duration / dt + 0.5))
     plant.reset(run.q0, np.zeros(run.n))
@@ -179,7 +179,24 @@ def test_controller_settings_defaults_are_the_cpp_defaults():
     assert (s.formulation, s.derivatives, s.N) == ("id", "adjoint", 25)
     assert (s.cgmres.kmax, s.cgmres.Tf, s.cgmres.dt, s.cgmres.shooting) == (10, 0.5, 1e-3, "single")
     assert s.cgmres.products == "difference"
-    assert s.q_ref.shape == (0,) and s.horizon_model is None and s.limits_in_horizon
+    assert s.q_ref.shape == (0,) and s.limits_in_horizon
+    assert s.friction_loss.shape == s.friction_velocity.shape == s.q_start.shape == (0,)
+    assert (s.implicit_damping, s.plant_step) == ("off", 0.0)
+
+
+def test_a_controller_from_the_runs_settings_is_the_runs():
+    # the xArm7 has friction loss (smoothed in the horizon) and damping (implicit over the plant
+    # step in the torque rule): the settings carry them, and the controller chooses the same
+    task = idmpc.load_task(str(MJCF / "xarm7_reach.json"))
+    task.duration = 0.05
+    run = idmpc.TaskRun(task)
+    settings = run.settings
+    assert settings.friction_loss.max() > 0 and settings.plant_step > 0
+    by_run = python_loop(run)
+    mine = idmpc.Controller(run.model, settings)
+    assert python_loop(idmpc.TaskRun(task), mine) == by_run
+    with pytest.raises(ValueError, match="implicit damping: expected"):
+        settings.implicit_damping = "sometimes"
 
 
 def test_controller_from_settings():

@@ -54,9 +54,9 @@ TEST(PaperTask, IsTheDesignsSetup) {
   EXPECT_EQ(t.kmax, 10);
   const ResolvedTask r = resolve(t, 4);
   EXPECT_EQ(r.q0, (VecX<double>(4) << -M_PI, 0, 0, 0).finished());
-  EXPECT_TRUE(r.qref.isZero(0.0));
-  EXPECT_EQ(r.weights.R, VecX<double>::Constant(4, 1e-4));
-  EXPECT_DOUBLE_EQ(r.cgmres.dt, 1e-3);
+  EXPECT_TRUE(r.controller.q_ref.isZero(0.0));
+  EXPECT_EQ(r.controller.weights.R, VecX<double>::Constant(4, 1e-4));
+  EXPECT_DOUBLE_EQ(r.controller.cgmres.dt, 1e-3);
   EXPECT_DOUBLE_EQ(t.Qa_fallback, 1e-4);
 }
 
@@ -76,12 +76,12 @@ TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
   EXPECT_TRUE(t.offset_free);
   EXPECT_EQ(t.implicit_damping, "auto");
   const ResolvedTask r = resolve(t, 2);
-  EXPECT_EQ(r.weights.Qq.size(), 0);
+  EXPECT_EQ(r.controller.weights.Qq.size(), 0);
   EXPECT_EQ(r.q0, (VecX<double>(2) << 0.1, 0.2).finished());
-  EXPECT_EQ(r.weights.R, (VecX<double>(2) << 0.01, 0.02).finished());
-  EXPECT_EQ(r.formulation, Formulation::kForwardDynamics);
-  EXPECT_TRUE(r.cgmres.init_full_horizon);
-  EXPECT_EQ(r.cgmres.alpha, 0.0);
+  EXPECT_EQ(r.controller.weights.R, (VecX<double>(2) << 0.01, 0.02).finished());
+  EXPECT_EQ(r.controller.formulation, Formulation::kForwardDynamics);
+  EXPECT_TRUE(r.controller.cgmres.init_full_horizon);
+  EXPECT_EQ(r.controller.cgmres.alpha, 0.0);
   // and it survives the round trip through a summary's task
   const Task back = task_from_json(to_json(t), "round trip", Task{});
   EXPECT_TRUE(back.init_full_horizon);

@@ -31,7 +31,7 @@ TEST_P(LimitsClosedLoop, PandaReachStaysWithinItsTorqueLimitsAndSettles) {
   task.duration = 3.0;
   mj::TaskRun run(task);
   ASSERT_EQ(run.n(), 7);
-  ASSERT_TRUE(run.resolved().cgmres.init_full_horizon);
+  ASSERT_TRUE(run.settings().cgmres.init_full_horizon);
   const VecX<double> lower = run.torque_lower(), upper = run.torque_upper();
   ASSERT_TRUE(lower.allFinite() && upper.allFinite()) << "the Panda's actuators bound every joint";
   ASSERT_EQ(run.controller().problem().m(), 7) << "the limits are the horizon's constraints";
@@ -47,7 +47,7 @@ TEST_P(LimitsClosedLoop, PandaReachStaysWithinItsTorqueLimitsAndSettles) {
   EXPECT_GE(worst_commanded, 0.99) << "the limits must bind at the start";
   EXPECT_LE(worst_commanded, kWorstCommanded);
   EXPECT_LE(worst_applied, 0.0) << "the plant received a torque beyond its actuator's range";
-  EXPECT_LE((res.final_q - run.resolved().qref).cwiseAbs().maxCoeff(), kSettled);
+  EXPECT_LE((res.final_q - run.settings().q_ref).cwiseAbs().maxCoeff(), kSettled);
 }
 
 INSTANTIATE_TEST_SUITE_P(Formulations, LimitsClosedLoop,

@@ -7,6 +7,8 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -164,6 +166,37 @@ TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
   }
 }
 
+// One settings type: a Controller built by hand from the run's settings and model makes the same
+// automatic choices (smoothed friction, implicit damping, weights) and drives the plant exactly
+// as the run's own, under both solver families, with a frame target on a moving reference
+TEST(TaskRun, AControllerBuiltFromItsSettingsIsTheOneItRuns) {
+  for (const auto& [file, solver] : {std::pair{"xarm7_circle.json", "cgmres"}, std::pair{"fr3_reach.json", "riccati"}}) {
+    SCOPED_TRACE(file);
+    Task task = load_task(std::string(IDMPC_SOURCE_DIR "/mjcf/") + file);
+    task.duration = 0.05;
+    task.solver = solver;
+    mj::TaskRun run(task);
+    const ControllerSettings& settings = run.settings();
+    ASSERT_GT(settings.friction_loss.maxCoeff(), 0.0) << "an arm with friction loss, else the case proves little";
+    ASSERT_GT(settings.plant_step, 0.0);
+    ASSERT_FALSE(run.horizon().notes.empty()) << "choices made automatically, else the case proves little";
+    std::vector<VecX<double>> by_run, by_hand;
+    const mj::RunResult r = run.run([&](const mj::StepRecord& s) { by_run.push_back(s.u); });
+    ASSERT_FALSE(r.diverged) << r.divergence_reason;
+
+    Controller controller(run.shared_model(), settings);
+    const HorizonSetup& chosen = *controller.horizon_setup();
+    EXPECT_EQ(chosen.notes, run.horizon().notes);
+    EXPECT_EQ(chosen.weights.R, run.horizon().weights.R);
+    EXPECT_EQ(chosen.friction_velocity, run.horizon().friction_velocity);
+    mj::Plant plant(run.mj_model(), run.imported().actuation);
+    const mj::RunResult h =
+        mj::run_closed_loop(plant, controller, run.loop_settings(), [&](const mj::StepRecord& s) { by_hand.push_back(s.u); });
+    ASSERT_FALSE(h.diverged) << h.divergence_reason;
+    ASSERT_EQ(by_hand.size(), by_run.size());
+    for (size_t k = 0; k < by_run.size(); ++k) EXPECT_EQ(by_hand[k], by_run[k]) << "step " << k;
+  }
+}
 
 // a task from JSON text, as if read from `name` in the shipped mjcf/ directory
 Task task_in_mjcf(const std::string& json, const std::string& name = "t.json") {

@@ -14,7 +14,7 @@ Problem load_problem(const std::string& path) {
 }
 
 OcpWeights paper_weights(int n, double Qa) {
-  OcpWeights w = resolve(paper_task(), n).weights;
+  OcpWeights w = resolve(paper_task(), n).controller.weights;
   w.Qa.setConstant(Qa);
   return w;
 }

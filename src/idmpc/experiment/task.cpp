@@ -378,8 +378,10 @@ ResolvedTask resolve(const Task& t, int n) {
   for (const auto& [word, name] : words) {
     if (word.size() > kMaxShownChars) throw std::invalid_argument(std::string(name) + ": unknown value '" + abbreviate(word) + "'");
   }
-  ResolvedTask r{parse_formulation(t.formulation), parse_derivative_mode(t.derivatives), {}, {}, {}, {}, {}, {}, {}, {},
-                 {}, {}};
+  ResolvedTask r;
+  ControllerSettings& c = r.controller;
+  c.formulation = parse_formulation(t.formulation);
+  c.derivatives = parse_derivative_mode(t.derivatives);
   // bounded before anything is sized from it
   if (t.N < 1 || t.N > kMaxHorizonSteps) {
     throw std::invalid_argument("--N (cgmres.N) must be from 1 to " + std::to_string(kMaxHorizonSteps) +
@@ -402,26 +404,26 @@ ResolvedTask resolve(const Task& t, int n) {
     if (x.empty()) return VecX<double>();  // "auto": arm_weights fills it in with the model
     return non_negative(per_joint(x, n, both), both);
   };
-  r.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa.empty() ? std::vector<double>{0} : t.Qa, "Qa"),
+  c.weights = OcpWeights{weight(t.Qq, "Qq"), weight(t.Qv, "Qv"), weight(t.Qa.empty() ? std::vector<double>{0} : t.Qa, "Qa"),
                          weight(t.R, "R")};
   // the problem must be strictly convex in its decision variable (formulations.md §Costs); "auto" R is positive
-  const VecX<double>& R = r.weights.R;
-  const VecX<double>& Qa = r.weights.Qa;
+  const VecX<double>& R = c.weights.R;
+  const VecX<double>& Qa = c.weights.Qa;
   for (int j = 0; j < n && R.size() == n; ++j) {
-    if (r.formulation == Formulation::kForwardDynamics && !(R[j] > 0)) {
+    if (c.formulation == Formulation::kForwardDynamics && !(R[j] > 0)) {
       throw std::invalid_argument("--R (weights.R) must be positive with FD: the torque is the decision "
                                   "variable and R its only weight; got " + text(R[j]) + " on joint " +
                                   std::to_string(j));
     }
-    if (r.formulation == Formulation::kInverseDynamics && !(R[j] + Qa[j] > 0)) {
+    if (c.formulation == Formulation::kInverseDynamics && !(R[j] + Qa[j] > 0)) {
       throw std::invalid_argument("--R and --Qa (weights.R, weights.Qa) are both 0 on joint " + std::to_string(j) +
                                   ": ID needs one of them positive to weight the acceleration");
     }
   }
-  if (r.formulation == Formulation::kForwardDynamics && (Qa.array() != 0).any()) {
+  if (c.formulation == Formulation::kForwardDynamics && (Qa.array() != 0).any()) {
     r.warnings.push_back("--Qa (weights.Qa) has no effect with FD: the acceleration is not a decision variable there");
   }
-  r.qref = finite(t.qref.empty() ? VecX<double>::Zero(n) : per_joint(t.qref, n, "--qref (qref)"), "--qref (qref)");
+  c.q_ref = finite(t.qref.empty() ? VecX<double>::Zero(n) : per_joint(t.qref, n, "--qref (qref)"), "--qref (qref)");
   if (t.target) {
     // the frame target's own values (its frame and "start" pose need the model: mj::TaskRun)
     const FrameTask& f = *t.target;
@@ -474,38 +476,39 @@ ResolvedTask resolve(const Task& t, int n) {
     }
     r.q0 = finite(Eigen::Map<const VecX<double>>(t.q0.data(), n), "--q0 (q0)");
   }
-  r.cgmres.kmax = t.kmax;
-  r.cgmres.Tf = t.Tf;
-  r.cgmres.alpha = t.alpha;
-  r.cgmres.dt = t.dt;
-  r.cgmres.zeta = t.zeta;
-  r.cgmres.h = t.h;
-  r.cgmres.init_full_horizon = t.init_full_horizon;
-  r.cgmres.shooting = parse_shooting(t.shooting);
+  c.cgmres.kmax = t.kmax;
+  c.cgmres.Tf = t.Tf;
+  c.cgmres.alpha = t.alpha;
+  c.cgmres.dt = t.dt;
+  c.cgmres.zeta = t.zeta;
+  c.cgmres.h = t.h;
+  c.cgmres.init_full_horizon = t.init_full_horizon;
+  c.cgmres.shooting = parse_shooting(t.shooting);
   try {
-    r.cgmres.products = parse_products(t.products);
+    c.cgmres.products = parse_products(t.products);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--products (cgmres.products): ") + e.what());
   }
-  r.cgmres.validate();
+  c.cgmres.validate();
   try {
-    r.solver = parse_solver(t.solver);
+    c.solver = parse_solver(t.solver);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--solver (solver): ") + e.what());
   }
-  r.riccati = t.riccati;
-  r.riccati.validate();  // its message names the setting
+  c.riccati = t.riccati;
+  c.riccati.validate();  // its message names the setting
   if (t.implicit_damping != "on" && t.implicit_damping != "off" && t.implicit_damping != "auto") {
     throw std::invalid_argument("--implicit-damping (implicit_damping): expected on, off or auto, got '" +
                                 t.implicit_damping + "'");
   }
-  if (t.implicit_damping == "on" && t.alpha != 0) {
+  c.implicit_damping = parse_implicit_damping(t.implicit_damping);
+  if (c.implicit_damping == ImplicitDamping::kOn && t.alpha != 0 && c.solver != SolverKind::kRiccati) {
     throw std::invalid_argument("--implicit-damping (implicit_damping) needs a fixed horizon, alpha = 0 (its step is "
                                 "T_f/N), got alpha = " + text(t.alpha));
   }
   if (!t.friction_velocity.empty()) {
-    r.friction_velocity = per_joint(t.friction_velocity, n, "--friction-velocity (friction_velocity)");
-    if (!(r.friction_velocity.array() > 0).all() || !r.friction_velocity.allFinite()) {
+    c.friction_velocity = per_joint(t.friction_velocity, n, "--friction-velocity (friction_velocity)");
+    if (!(c.friction_velocity.array() > 0).all() || !c.friction_velocity.allFinite()) {
       throw std::invalid_argument("--friction-velocity (friction_velocity) must be positive and finite");
     }
   }
@@ -521,6 +524,9 @@ ResolvedTask resolve(const Task& t, int n) {
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(std::string("--latency (latency): ") + e.what());
   }
+  c.N = t.N;
+  c.observer_time_constant = t.offset_free ? t.observer_time_constant : 0.0;
+  c.simd_stages = t.simd_stages;
   if (!(t.reach_tolerance >= 0) || !std::isfinite(t.reach_tolerance)) {
     throw std::invalid_argument("--reach-tolerance (reach_tolerance) must be non-negative and finite, got " +
                                 text(t.reach_tolerance));

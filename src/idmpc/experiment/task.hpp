@@ -21,7 +21,7 @@
 ///   "actuate_every_joint" with direct_torque on an under-actuated model: the user's confirmation
 ///                  that every joint becomes actuated (bool)
 ///   "implicit_damping" integrate joint damping implicitly in the horizon (with_implicit_damping,
-///                  step T_f/N; needs alpha = 0): true, false or "auto" (when the explicit
+///                  step T_f/N; C/GMRES needs alpha = 0): true, false or "auto" (when the explicit
 ///                  Euler step would be unstable, Δτ·max eig(M⁻¹D) > 1)
 ///   "friction_velocity" ε of the smooth joint friction f·tanh(v/ε) in the horizon: a scalar or
 ///                  one per joint [rad/s or m/s], or "auto" (the smallest that keeps the
@@ -143,17 +143,15 @@ inline constexpr int kMaxHorizonSteps = kMaxHorizonStages;
 
 /// @brief A task made concrete for a model with n joints: validated vectors and settings.
 struct ResolvedTask {
-  Formulation formulation;
-  DerivativeMode derivatives;
-  VecX<double> q0, qref;           ///< q0 empty for "home": the model's keyframe
-  VecX<double> torque_limit;  ///< size n, +infinity where the task sets none
-  OcpWeights weights;              ///< Qq, Qv, R of size 0 where the task says "auto"
-  VecX<double> friction_velocity;  ///< size n, or size 0 for "auto"
-  CgmresSettings cgmres;
+  /// @brief The controller's settings as far as the task gives them: Q_q, Q_v, R and ε empty where
+  /// the task says "auto" (the Controller chooses them, horizon_setup.hpp). mj::TaskRun fills in
+  /// what needs the model: the torque range, friction loss, plant step, frame target, references
+  /// and q_start.
+  ControllerSettings controller;
+  VecX<double> q0;                 ///< empty for "home": the model's keyframe
+  VecX<double> torque_limit;       ///< size n, +infinity where the task sets none
   Latency latency;                 ///< compute latency in the closed loop (none by default)
   std::vector<std::string> warnings;  ///< settings accepted but without effect (e.g. Q_a in FD)
-  SolverKind solver = SolverKind::kCgmres;
-  RiccatiSettings riccati;
 };
 /// @brief Throws std::invalid_argument naming the field (a scalar or n values expected,
 /// non-negative weights, finite values, valid C/GMRES settings, N within kMaxHorizonSteps).

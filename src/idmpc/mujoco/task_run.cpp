@@ -45,7 +45,7 @@ TaskRun::TaskRun(const Task& task)
   const mjModel* m = loaded_.model.get();
   const int n = model_->n;
   if (resolved_.q0.size() == 0) resolved_.q0 = keyframe_qpos(m, task.q0_rule, task.model);
-  if (task.qref_start) resolved_.qref = resolved_.q0;
+  if (task.qref_start) resolved_.controller.q_ref = resolved_.q0;
   set_up_references();
 
   // the actuators' ranges, narrowed by the task's limit: constraints of the horizon (formulations.md §Torque limits)
@@ -56,35 +56,26 @@ TaskRun::TaskRun(const Task& task)
     if (!std::isfinite(lower_[j]) && !std::isfinite(upper_[j])) unbounded_.push_back(model_->joint_names[j]);
   }
 
-  // the horizon's model (the plant's passive forces, formulations.md §Passive forces) and the "auto" weights, the
-  // same for both formulations
+  // the controller's settings: the task's, with what needs the model (the horizon's passive
+  // forces, formulations.md §Passive forces; its "auto" choices, the same for both formulations,
+  // are the Controller's: horizon_setup.hpp)
   plant_ = std::make_unique<Plant>(m, imported_.actuation);
-  const std::string timestep_warning = plant_->set_control_period(resolved_.cgmres.dt);
-  setup_ = std::make_unique<const HorizonSetup>(
-      setup_horizon(task, resolved_, *model_, friction_loss(m), lower_, upper_, plant_->timestep()));
-
-  ControllerSettings cs;
-  cs.formulation = resolved_.formulation;
-  cs.derivatives = resolved_.derivatives;
-  cs.N = task.N;
-  cs.cgmres = resolved_.cgmres;
-  cs.solver = resolved_.solver;
-  cs.riccati = resolved_.riccati;
-  cs.weights = setup_->weights;
-  cs.q_ref = resolved_.qref;
+  const std::string timestep_warning = plant_->set_control_period(resolved_.controller.cgmres.dt);
+  ControllerSettings& cs = resolved_.controller;
+  cs.q_start = resolved_.q0;
   cs.frame_target = frame_target_;
   (frame_target_ ? cs.frame_reference : cs.joint_reference) = reference_;
   cs.torque_lower = lower_;
   cs.torque_upper = upper_;
-  cs.observer_time_constant = task.offset_free ? task.observer_time_constant : 0.0;
-  cs.simd_stages = task.simd_stages;
-  cs.horizon_model = std::make_shared<const Model>(setup_->horizon_model);
-  controller_ = std::make_unique<Controller>(std::make_shared<const Model>(setup_->plant_model), cs);
+  cs.friction_loss = friction_loss(m).cwiseMax(0.0);
+  cs.plant_step = plant_->timestep();
+  controller_ = std::make_unique<Controller>(model_, cs);
+  const HorizonSetup& setup = *controller_->horizon_setup();
 
   // what the run does not model, had to change or chose by itself
   if (!loaded_.translations.empty()) notices_.push_back(loaded_.notice());
   notices_.insert(notices_.end(), imported_.notices.begin(), imported_.notices.end());
-  notices_.insert(notices_.end(), setup_->notes.begin(), setup_->notes.end());
+  notices_.insert(notices_.end(), setup.notes.begin(), setup.notes.end());
   warnings_ = resolved_.warnings;
   if (!unbounded_.empty()) {
     warnings_.push_back("no torque limit is declared for joint(s) " + joint_list(unbounded_) +
@@ -96,7 +87,7 @@ TaskRun::TaskRun(const Task& task)
     warnings_.push_back("the plant has features the controller does not model: " + list);
   }
   for (const auto& w : range_violations(m, resolved_.q0, "q0")) warnings_.push_back(w);
-  for (const auto& w : range_violations(m, resolved_.qref, "qref")) warnings_.push_back(w);
+  for (const auto& w : range_violations(m, resolved_.controller.q_ref, "qref")) warnings_.push_back(w);
   if (!timestep_warning.empty()) warnings_.push_back(timestep_warning);
 }
 
@@ -104,7 +95,7 @@ void TaskRun::set_up_references() {
   const Task& task = task_;
   const std::string where = "task file '" + (task.source.empty() ? std::string("(given)") : task.source) + "'";
   const std::string base_dir = std::filesystem::path(task.source).parent_path().string();
-  VecX<double> start = resolved_.qref;
+  VecX<double> start = resolved_.controller.q_ref;
   if (task.target) {
     const FrameTask& f = *task.target;
     const mjModel* m = loaded_.model.get();
@@ -168,7 +159,7 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.n = n;
   const bool cgmres = c.solver_kind() == SolverKind::kCgmres;
   s.simd_stages = cgmres && (c.nlp().stage_batching() ||
-                             (c.problem().costate_lanes() && resolved_.cgmres.shooting == ShootingScheme::kMultiple));
+                             (c.problem().costate_lanes() && resolved_.controller.cgmres.shooting == ShootingScheme::kMultiple));
   s.zeta = cgmres ? c.cgmres().settings().zeta : 0.0;
   s.steps = result.steps;
   s.diverged = result.diverged;
@@ -207,18 +198,18 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.max_contact_force = result.max_contact_force;
   s.final_disturbance.assign(result.final_disturbance.data(),
                              result.final_disturbance.data() + result.final_disturbance.size());
-  s.implicit_damping = setup_->implicit_damping;
-  s.friction_velocity.assign(setup_->friction_velocity.data(), setup_->friction_velocity.data() + n);
-  s.Qq.assign(setup_->weights.Qq.data(), setup_->weights.Qq.data() + n);
-  s.Qv.assign(setup_->weights.Qv.data(), setup_->weights.Qv.data() + n);
-  s.R.assign(setup_->weights.R.data(), setup_->weights.R.data() + n);
+  s.implicit_damping = horizon().implicit_damping;
+  s.friction_velocity.assign(horizon().friction_velocity.data(), horizon().friction_velocity.data() + n);
+  s.Qq.assign(horizon().weights.Qq.data(), horizon().weights.Qq.data() + n);
+  s.Qv.assign(horizon().weights.Qv.data(), horizon().weights.Qv.data() + n);
+  s.R.assign(horizon().weights.R.data(), horizon().weights.R.data() + n);
   s.unbounded_joints = unbounded_;
   s.torque_lower.assign(lower_.data(), lower_.data() + n);
   s.torque_upper.assign(upper_.data(), upper_.data() + n);
   s.saturated_steps = result.saturated_steps;
   s.saturated_any = result.saturated_any;
   s.max_constraint_violation = result.max_constraint_violation;
-  if (s.diverged) s.divergence_hint = divergence_hint(task_, setup_->damping_step_ratio);
+  if (s.diverged) s.divergence_hint = divergence_hint(task_, horizon().damping_step_ratio);
   s.model_hash = file_hash(task_.model);  // render checks a log's model and summary by these
   s.log_hash = file_hash(log_path);
   return s;

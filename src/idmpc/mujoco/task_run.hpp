@@ -18,7 +18,6 @@
 #include <string>
 #include <vector>
 
-#include "idmpc/experiment/horizon_setup.hpp"
 #include "idmpc/experiment/run_record.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
 #include "idmpc/mujoco/import.hpp"
@@ -46,8 +45,13 @@ class TaskRun {
   const Model& model() const { return *model_; }
   std::shared_ptr<const Model> shared_model() const { return model_; }
   const ImportedModel& imported() const { return imported_; }
-  /// @brief The horizon's model, weights and automatic choices (HorizonSetup).
-  const HorizonSetup& horizon() const { return *setup_; }
+  /// @brief The controller's settings: the task's, with the model's torque range, friction loss,
+  /// plant step, frame target and references filled in. A Controller built from them and
+  /// shared_model() is the one this run drives (its "auto" choices made the same way).
+  const ControllerSettings& settings() const { return resolved_.controller; }
+  /// @brief The horizon's model, weights and automatic choices (HorizonSetup), as the controller
+  /// made them.
+  const HorizonSetup& horizon() const { return *controller_->horizon_setup(); }
   Controller& controller() { return *controller_; }
   const Controller& controller() const { return *controller_; }
   /// @brief The MuJoCo plant, its control period set to the controller's Δt.
@@ -91,7 +95,6 @@ class TaskRun {
   ResolvedTask resolved_;
   VecX<double> lower_, upper_;
   std::unique_ptr<Plant> plant_;
-  std::unique_ptr<const HorizonSetup> setup_;
   std::unique_ptr<Controller> controller_;
   std::vector<std::string> unbounded_, notices_, warnings_;
   std::optional<FrameTarget> frame_target_;

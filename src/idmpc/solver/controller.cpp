@@ -13,45 +13,34 @@ namespace idmpc {
 
 namespace {
 
-// the horizon's problem of `settings` for the plant model `model`, its sizes checked
-OcpProblem make_problem(const std::shared_ptr<const Model>& model, const ControllerSettings& s) {
-  validate(s);
-  if (!model) throw std::invalid_argument("controller: no model given");
-  std::shared_ptr<const Model> horizon = s.horizon_model ? s.horizon_model : model;
-  const int n = model->n;
-  if (horizon->n != n) {
-    throw std::invalid_argument("controller settings: the horizon model has " + std::to_string(horizon->n) +
-                                " joints, the model " + std::to_string(n));
-  }
-  auto check_size = [n](const VecX<double>& x, const char* name, bool may_be_empty) {
-    if (x.size() == n || (may_be_empty && x.size() == 0)) return;
-    throw std::invalid_argument(std::string("controller settings: ") + name + " has " + std::to_string(x.size()) +
-                                " entries, the model " + std::to_string(n) + " joints");
-  };
-  check_size(s.q_ref, "q_ref", false);
-  check_size(s.torque_lower, "torque_lower", true);
-  check_size(s.torque_upper, "torque_upper", true);
-  if (s.torque_lower.size() != s.torque_upper.size()) {
-    throw std::invalid_argument("controller settings: torque_lower and torque_upper must both be given or both empty");
-  }
-  OcpWeights w = s.weights;
+// the horizon's problem of `settings` with the models and weights `setup` chose for them
+OcpProblem make_problem(const HorizonSetup& setup, const ControllerSettings& s) {
+  const int n = setup.horizon_model->n;
+  OcpWeights w = setup.weights;
   if (w.Qa.size() == 0) w.Qa = VecX<double>::Zero(n);
   TorqueLimits limits;
   if (s.limits_in_horizon && s.torque_lower.size() == n &&
       (s.torque_lower.array().isFinite() || s.torque_upper.array().isFinite()).any()) {
     limits = TorqueLimits{s.torque_lower, s.torque_upper};
   }
-  OcpProblem problem(std::move(horizon), s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
+  OcpProblem problem(setup.horizon_model, s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
   problem.set_frame_target(s.frame_target);
   if (s.frame_reference) problem.set_frame_trajectory(s.frame_reference);
   if (s.joint_reference) problem.set_joint_trajectory(s.joint_reference);
   return problem;
 }
 
+// the choices of horizon_setup.hpp for `settings` on `model`, the settings checked first
+std::shared_ptr<const HorizonSetup> checked_setup(const std::shared_ptr<const Model>& model,
+                                                  const ControllerSettings& settings) {
+  validate(settings);
+  if (!model) throw std::invalid_argument("controller: no model given");
+  return std::make_shared<const HorizonSetup>(setup_horizon(*model, settings));
+}
+
 // the solver of `settings` over `problem`
 std::unique_ptr<MpcSolver> make_solver(OcpProblem problem, const ControllerSettings& s) {
   if (s.solver == SolverKind::kRiccati) {
-    s.cgmres.validate();
     return std::make_unique<RiccatiSolver>(std::move(problem), s.cgmres.Tf, s.cgmres.dt, s.riccati);
   }
   auto solver = std::make_unique<CgmresMpc>(std::move(problem), s.cgmres);
@@ -67,10 +56,19 @@ void validate(const ControllerSettings& s) {
     throw std::invalid_argument("controller settings: N must be from 1 to " + std::to_string(kMaxHorizonStages) +
                                 " horizon stages, got " + std::to_string(s.N));
   }
+  s.cgmres.validate();  // Δt and T_f, which both solvers use
+  if (!(s.plant_step >= 0) || !std::isfinite(s.plant_step)) {
+    throw std::invalid_argument("controller settings: plant_step must be finite and non-negative [s], got " +
+                                std::to_string(s.plant_step));
+  }
 }
 
 Controller::Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings)
-    : Controller(make_solver(make_problem(model, settings), settings), model) {
+    : Controller(settings, checked_setup(model, settings)) {}
+
+Controller::Controller(const ControllerSettings& settings, std::shared_ptr<const HorizonSetup> setup)
+    : Controller(make_solver(make_problem(*setup, settings), settings), setup->plant_model) {
+  setup_ = std::move(setup);
   const int n = this->n();
   if (settings.torque_lower.size() == n) {
     if (settings.limits_in_horizon) {

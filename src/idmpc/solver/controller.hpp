@@ -25,61 +25,22 @@
 #include "idmpc/model/data.hpp"
 #include "idmpc/solver/cgmres.hpp"
 #include "idmpc/solver/cgmres_mpc.hpp"
+#include "idmpc/solver/controller_settings.hpp"
+#include "idmpc/solver/horizon_setup.hpp"
 #include "idmpc/solver/riccati.hpp"
 #include "idmpc/solver/shooting.hpp"
 
 namespace idmpc {
-
-/// @brief Everything a controller is built from, besides its model. Vectors have one entry per
-/// joint; Controller's constructor checks them and names the first bad one.
-struct ControllerSettings {
-  Formulation formulation = Formulation::kInverseDynamics;
-  DerivativeMode derivatives = DerivativeMode::kAdjoint;
-  int N = 25;                 ///< horizon stages
-  /// @brief The solver family (mpc_solver.hpp): C/GMRES or the Riccati recursion.
-  SolverKind solver = SolverKind::kCgmres;
-  /// @brief The sampling period Δt and the horizon T_f (both solvers); α, kmax, ζ, h, shooting
-  /// scheme, products and start (C/GMRES).
-  CgmresSettings cgmres;
-  RiccatiSettings riccati;    ///< iterations per update, tolerances, barrier (Riccati)
-  OcpWeights weights;         ///< Q_q, Q_v, Q_a, R (Q_a may be empty: zero)
-  VecX<double> q_ref;         ///< the joint target; Controller::set_target changes it between updates
-  /// @brief A moving joint target q_ref(t) (its rate the velocity reference); null: q_ref.
-  std::shared_ptr<const Trajectory> joint_reference;
-  /// @brief A target for a frame of the robot (cost.hpp: position and orientation weights),
-  /// beside the joint terms (with a frame target, Q_q and q_ref weigh the posture).
-  std::optional<FrameTarget> frame_target;
-  /// @brief The frame target's position moving as p_ref(t); null: FrameTarget::position.
-  std::shared_ptr<const Trajectory> frame_reference;
-  /// @brief The actuators' torque range, given once: the horizon's constraints (formulations.md §Torque limits) on
-  /// every joint bounded on both sides, and the clamp of every torque the controller returns.
-  /// Empty: unbounded; ±infinity per joint: that joint unbounded.
-  VecX<double> torque_lower, torque_upper;
-  /// @brief false: the limits only clamp the returned torque; the horizon is unconstrained.
-  bool limits_in_horizon = true;
-  double observer_time_constant = 0;  ///< disturbance observer (formulations.md §Disturbance observer); 0: off
-  bool simd_stages = true;            ///< stages in SIMD lanes where independent
-  /// @brief The model of the horizon, when it differs from the plant's (implicit damping over
-  /// the horizon step, smoothed friction); null: the controller's model.
-  std::shared_ptr<const Model> horizon_model;
-};
-
-/// @brief The largest horizon (N) a controller takes: far above any useful setting (the paper's
-/// largest is 50), and small enough that the stage workspace, sized from it, fits in memory.
-inline constexpr int kMaxHorizonStages = 10000;
-
-/// @brief Throws std::invalid_argument naming the setting unless the settings' scalars can size a
-/// controller: N from 1 to kMaxHorizonStages. Controller's constructor calls it first.
-void validate(const ControllerSettings& settings);
 
 class Controller {
  public:
   using Vec = VecX<double>;
   using In = Eigen::Ref<const Vec>;
 
-  /// @brief The controller of `model` (the plant's model: the ID torque rule and the observer
-  /// use it) with `settings`. Shares the models, owns the problem and the solver. Throws
-  /// std::invalid_argument naming the first bad setting.
+  /// @brief The controller of `model` (the robot's rigid-body model; the plant's passive forces it
+  /// lacks are settings) with `settings`, their "auto" choices made (horizon_setup()). Shares the
+  /// models, owns the problem and the solver. Throws std::invalid_argument naming the first bad
+  /// setting.
   Controller(std::shared_ptr<const Model> model, const ControllerSettings& settings);
 
   /// @brief From a problem built by hand: owns it and the solver (C/GMRES with `settings`); the
@@ -97,6 +58,9 @@ class Controller {
   Controller& operator=(Controller&&) noexcept = default;
   ~Controller() = default;
 
+  /// @brief The models and weights chosen for the settings (horizon_setup.hpp) and why; null for a
+  /// controller built from a problem or a solver.
+  const HorizonSetup* horizon_setup() const { return setup_.get(); }
   int n() const { return solver_->problem().n(); }
   double dt() const { return solver_->dt(); }
   const OcpProblem& problem() const { return solver_->problem(); }
@@ -196,7 +160,11 @@ class Controller {
   // the clamp [lower, upper], checked; with match_horizon, equal to the horizon's bounds where it has any
   void check_and_set_clamp(const Vec& lower, const Vec& upper, bool match_horizon);
 
+  // from the settings and the choices made for them
+  Controller(const ControllerSettings& settings, std::shared_ptr<const HorizonSetup> setup);
+
   std::unique_ptr<MpcSolver> solver_;
+  std::shared_ptr<const HorizonSetup> setup_;  ///< null when built from a problem or a solver
   std::shared_ptr<const Model> plant_model_;  ///< for the ID torque and the observer
   Data data_;                 ///< for the ID torque
   Vec tau_, tau_cmd_, a0_hat_, q_pred_, v_pred_, lower_, upper_;

@@ -1,7 +1,9 @@
-#include "idmpc/experiment/horizon_setup.hpp"
+#include "idmpc/solver/horizon_setup.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -61,18 +63,19 @@ VecX<double> inverse_inertia_diagonal(const Model& model, const std::vector<VecX
 // than the horizon step resolves. For joint j alone (effective inertia m_j = 1/(M⁻¹)_jj at its
 // lightest over q0 and q_ref) the LQR of ½Q_q e² + ½R u² has stiffness √(Q_q/R) and frequency
 // ω = (Q_q/R)^¼/√m_j; ω·Δτ ≤ 0.35 needs R ≥ Q_q/(m_j² ω_max⁴), ω_max = 0.35/Δτ.
-OcpWeights auto_weights(const ResolvedTask& r, bool frame_target, const Model& model, const Model& stepped,
-                        double dtau, const VecX<double>& lower, const VecX<double>& upper,
-                        std::vector<std::string>& notes) {
-  OcpWeights w = r.weights;
+OcpWeights auto_weights(const ControllerSettings& s, const std::vector<VecX<double>>& configurations,
+                        const Model& model, const Model& stepped, double dtau, const VecX<double>& lower,
+                        const VecX<double>& upper, std::vector<std::string>& notes) {
+  OcpWeights w = s.weights;
   const int n = model.n;
+  const bool frame_target = s.frame_target.has_value();
   if (w.Qq.size() == 0) w.Qq = VecX<double>::Constant(n, frame_target ? kAutoPostureQq : kAutoQq);
   if (w.Qv.size() == 0) w.Qv = VecX<double>::Constant(n, frame_target ? kAutoPostureQv : kAutoQv);
   if (w.R.size() == 0) {
     Data data(model);
     const VecX<double> zero = VecX<double>::Zero(n);
-    const VecX<double> hold = rnea(model, data, r.qref, zero, zero);
-    const VecX<double> inertia = crba(model, data, r.qref).diagonal();
+    const VecX<double> hold = rnea(model, data, s.q_ref, zero, zero);
+    const VecX<double> inertia = crba(model, data, s.q_ref).diagonal();
     VecX<double> scale(n);
     for (int j = 0; j < n; ++j) {
       const bool lo = std::isfinite(lower[j]), hi = std::isfinite(upper[j]);
@@ -86,7 +89,7 @@ OcpWeights auto_weights(const ResolvedTask& r, bool frame_target, const Model& m
       scale[j] = std::max(scale[j], 1e-6);
     }
     w.R = kAutoTorqueCost * scale.cwiseAbs2().cwiseInverse();
-    const VecX<double> inv_inertia = inverse_inertia_diagonal(stepped, {r.q0, r.qref});
+    const VecX<double> inv_inertia = inverse_inertia_diagonal(stepped, configurations);
     const double omega = kAutoStepFraction / dtau;
     for (int j = 0; j < n; ++j) {
       w.R[j] = std::max(w.R[j], w.Qq[j] * inv_inertia[j] * inv_inertia[j] / std::pow(omega, 4));
@@ -100,24 +103,71 @@ OcpWeights auto_weights(const ResolvedTask& r, bool frame_target, const Model& m
 
 }  // namespace
 
-HorizonSetup setup_horizon(const Task& task, const ResolvedTask& r, const Model& model,
-                           const VecX<double>& friction_loss, const VecX<double>& lower,
-                           const VecX<double>& upper, double plant_step) {
+std::string to_string(ImplicitDamping d) {
+  switch (d) {
+    case ImplicitDamping::kOff: return "off";
+    case ImplicitDamping::kOn: return "on";
+    case ImplicitDamping::kAuto: return "auto";
+  }
+  return "?";
+}
+
+ImplicitDamping parse_implicit_damping(const std::string& s) {
+  if (s == "off") return ImplicitDamping::kOff;
+  if (s == "on") return ImplicitDamping::kOn;
+  if (s == "auto") return ImplicitDamping::kAuto;
+  throw std::invalid_argument("implicit damping: expected \"off\", \"on\" or \"auto\", got \"" + s + "\"");
+}
+
+HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   const int n = model.n;
-  if (friction_loss.size() != n || lower.size() != n || upper.size() != n || r.q0.size() != n ||
-      r.qref.size() != n) {
-    throw std::invalid_argument("horizon setup: friction, limits, q0 and q_ref must have " + std::to_string(n) +
-                                " entries");
+  auto check_size = [n](const VecX<double>& x, const char* name, bool may_be_empty) {
+    if (x.size() == n || (may_be_empty && x.size() == 0)) return;
+    throw std::invalid_argument(std::string("controller settings: ") + name + " has " + std::to_string(x.size()) +
+                                " entries, the model " + std::to_string(n) + " joints");
+  };
+  check_size(s.q_ref, "q_ref", false);
+  check_size(s.q_start, "q_start", true);
+  check_size(s.torque_lower, "torque_lower", true);
+  check_size(s.torque_upper, "torque_upper", true);
+  check_size(s.friction_loss, "friction_loss", true);
+  check_size(s.friction_velocity, "friction_velocity", true);
+  check_size(s.weights.Qq, "weights.Qq", true);
+  check_size(s.weights.Qv, "weights.Qv", true);
+  check_size(s.weights.Qa, "weights.Qa", true);
+  check_size(s.weights.R, "weights.R", true);
+  if (s.torque_lower.size() != s.torque_upper.size()) {
+    throw std::invalid_argument("controller settings: torque_lower and torque_upper must both be given or both empty");
+  }
+  for (const VecX<double>* x : {&s.friction_loss, &s.friction_velocity}) {
+    if (!x->allFinite() || (x->array() < 0).any()) {
+      throw std::invalid_argument(std::string("controller settings: ") +
+                                  (x == &s.friction_loss ? "friction_loss" : "friction_velocity") +
+                                  " must be finite and non-negative");
+    }
+  }
+  if (s.friction_velocity.size() == n && ((s.friction_loss.array() > 0) && (s.friction_velocity.array() == 0)).any()) {
+    throw std::invalid_argument("controller settings: friction_velocity must be positive where there is friction loss");
   }
   std::vector<std::string> notes;
-  const double dtau = task.Tf / task.N;
-  const std::vector<VecX<double>> configurations = {r.q0, r.qref};
+  const double dtau = s.cgmres.Tf / s.N;
+  std::vector<VecX<double>> configurations = {s.q_ref};
+  if (s.q_start.size() == n) configurations.insert(configurations.begin(), s.q_start);
+  const VecX<double> infinite = VecX<double>::Constant(n, std::numeric_limits<double>::infinity());
+  const VecX<double> lower = s.torque_lower.size() == n ? s.torque_lower : VecX<double>(-infinite);
+  const VecX<double> upper = s.torque_upper.size() == n ? s.torque_upper : infinite;
+  const VecX<double> friction_loss = s.friction_loss.size() == n ? s.friction_loss : VecX<double>::Zero(n);
 
-  // damping: explicit unless asked for, or unstable with "auto"
+  // damping: explicit unless asked for, or unstable with "auto"; implicit needs a fixed horizon
   const double ratio = dtau * damping_rate(model, configurations);
-  bool implicit = task.implicit_damping == "on";
-  if (task.implicit_damping == "auto" && ratio > 1) {
-    if (task.alpha == 0) {
+  const bool fixed_horizon = s.solver == SolverKind::kRiccati || s.cgmres.alpha == 0;
+  bool implicit = s.implicit_damping == ImplicitDamping::kOn;
+  if (implicit && !fixed_horizon) {
+    throw std::invalid_argument("controller settings: implicit damping needs a fixed horizon (cgmres.alpha = 0): "
+                                "its step T_f/N is built into the horizon model");
+  }
+  if (s.implicit_damping == ImplicitDamping::kAuto && ratio > 1) {
+    if (fixed_horizon) {
       implicit = true;
       notes.push_back("joint damping integrated implicitly in the horizon (implicit_damping \"auto\"): "
                       "dtau*max eig(M^-1 D) = " + text(ratio) + " > 1, the explicit Euler step would be unstable");
@@ -133,8 +183,8 @@ HorizonSetup setup_horizon(const Task& task, const ResolvedTask& r, const Model&
   // friction loss: f·tanh(v/ε), ε given or the smallest with a stable explicit step
   VecX<double> eps = VecX<double>::Zero(n);
   if ((friction_loss.array() > 0).any()) {
-    if (r.friction_velocity.size() == n) {
-      eps = r.friction_velocity;
+    if (s.friction_velocity.size() == n) {
+      eps = s.friction_velocity;
     } else {
       // explicit in the friction, implicit or not in the damping, the step's velocity factor is
       // (m − Δτ·f/ε)/(m + Δτ·d) near v = 0, m = 1/(M⁻¹)_jj without the implicit term: ≥ 0 for this ε
@@ -145,12 +195,13 @@ HorizonSetup setup_horizon(const Task& task, const ResolvedTask& r, const Model&
       if (!(friction_loss[j] > 0)) eps[j] = 0;
     }
     notes.push_back("joint friction loss in the horizon as f*tanh(v/eps), eps = [" + list(eps) + "] " +
-                    (r.friction_velocity.size() == n ? "(given)" : "(\"auto\": the smallest with a stable explicit step)"));
+                    (s.friction_velocity.size() == n ? "(given)" : "(\"auto\": the smallest with a stable explicit step)"));
   }
-  const Model with_friction = with_joint_friction(model, friction_loss.cwiseMax(0.0), eps);
-  Model horizon_model = with_implicit_damping(with_friction, implicit_step);
-  Model plant_model = with_implicit_damping(with_friction, plant_step);
-  OcpWeights weights = auto_weights(r, task.target.has_value(), with_friction, stepped, dtau, lower, upper, notes);
+  // (without friction loss given, the model keeps its own friction terms, if any)
+  const Model with_friction = s.friction_loss.size() == n ? with_joint_friction(model, friction_loss, eps) : model;
+  auto horizon_model = std::make_shared<const Model>(with_implicit_damping(with_friction, implicit_step));
+  auto plant_model = std::make_shared<const Model>(with_implicit_damping(with_friction, s.plant_step));
+  OcpWeights weights = auto_weights(s, configurations, with_friction, stepped, dtau, lower, upper, notes);
   return HorizonSetup{std::move(plant_model), std::move(horizon_model), std::move(weights), implicit, ratio,
                       std::move(eps), std::move(notes)};
 }

@@ -1,9 +1,10 @@
 #pragma once
 /// @file horizon_setup.hpp
-/// @brief What a task becomes on a given robot: the model both formulations' horizons use (the
-/// plant's passive forces, formulations.md §Passive forces) and the weights the task leaves "auto". Everything chosen
-/// here is chosen the same way for FD and ID, so that a comparison stays one of formulations,
-/// and each automatic choice is stated in `notes`.
+/// @brief What a Controller's settings become on its model: the model both formulations' horizons
+/// use (the plant's passive forces, formulations.md §Passive forces) and the weights the settings
+/// leave "auto". Everything chosen here is chosen the same way for FD and ID, so that a comparison
+/// stays one of formulations, and each automatic choice is stated in `notes`. The Controller makes
+/// these choices (Controller::horizon_setup), whoever built its settings.
 ///
 /// - Friction loss f (MuJoCo's dry-friction constraint) becomes the smooth torque f·tanh(v/ε).
 ///   "auto" ε_j = max(ε_min, Δτ·f_j·(M⁻¹)_jj): explicit in the friction, the horizon step's
@@ -13,8 +14,9 @@
 ///   = 0.1 rad/s keeps the residual smooth enough for C/GMRES's continuation on light, stiff arms.
 /// - Joint damping D is integrated implicitly over the horizon step Δτ = T_f/N
 ///   (with_implicit_damping) when asked, or with "auto" when the explicit Euler step would be
-///   unstable or oscillating: Δτ·max eig(M⁻¹D) > 1 at q0 or q_ref.
-/// - "auto" weights: Q_q = 100, Q_v = 10 (the shipped reach tasks'), and per joint
+///   unstable or oscillating: Δτ·max eig(M⁻¹D) > 1 at q_start or q_ref.
+/// - "auto" weights: Q_q = 100, Q_v = 10 (the shipped reach tasks'; with a frame target 1 and 1:
+///   the joint terms then only hold the posture), and per joint
 ///   R_j = max(10/τ_j², Q_q/(m_j²·ω⁴)): τ_j the joint's torque range half-width (a full-range
 ///   torque costs as much as 0.32 rad of error; without a declared limit, the torque that holds
 ///   q_ref twice over plus 20 rad/s² of the joint's own inertia), and the second term keeps the
@@ -23,10 +25,12 @@
 /// - The plant model (torque rule, observer) takes the damping implicitly over one plant step, as
 ///   MuJoCo's Euler and implicit integrators do.
 
+#include <memory>
 #include <string>
 #include <vector>
 
-#include "idmpc/experiment/task.hpp"
+#include "idmpc/model/model.hpp"
+#include "idmpc/solver/controller_settings.hpp"
 
 namespace idmpc {
 
@@ -34,24 +38,22 @@ namespace idmpc {
 inline constexpr double kMinFrictionVelocity = 0.1;
 
 struct HorizonSetup {
-  /// the imported model with the plant's friction loss, smoothed, and its damping implicit over
-  /// one plant step as MuJoCo's Euler and implicit integrators take it: the model of ID's torque
-  /// rule (eqs. 27–28) and of the disturbance observer, which act over one plant step
-  Model plant_model;
-  Model horizon_model;  ///< plant_model, with its damping implicit where chosen
-  OcpWeights weights;   ///< the task's, "auto" filled in
+  /// the model with the plant's friction loss, smoothed, and its damping implicit over one plant
+  /// step as MuJoCo's Euler and implicit integrators take it: the model of ID's torque rule
+  /// (eqs. 27–28) and of the disturbance observer, which act over one plant step
+  std::shared_ptr<const Model> plant_model;
+  std::shared_ptr<const Model> horizon_model;  ///< plant_model, with its damping implicit where chosen
+  OcpWeights weights;   ///< the settings', "auto" filled in (Q_a empty: zero)
   bool implicit_damping = false;
-  double damping_step_ratio = 0;   ///< Δτ·max eig(M⁻¹D) over q0 and q_ref
+  double damping_step_ratio = 0;   ///< Δτ·max eig(M⁻¹D) over q_start and q_ref
   VecX<double> friction_velocity;  ///< ε per joint (0 where there is no friction)
   std::vector<std::string> notes;  ///< what was chosen automatically, and why
 };
 
-/// @brief The horizon model and weights of `task` (resolved as `r`, with r.q0 filled in) on
-/// `model` (the imported model, without friction), whose joints have MuJoCo's friction loss
-/// `friction_loss` and the torque range [lower, upper] (±infinity where undeclared), simulated
-/// with steps of `plant_step` seconds. Throws std::invalid_argument for sizes other than n.
-HorizonSetup setup_horizon(const Task& task, const ResolvedTask& r, const Model& model,
-                           const VecX<double>& friction_loss, const VecX<double>& lower,
-                           const VecX<double>& upper, double plant_step);
+/// @brief The horizon model and weights of `settings` on `model` (the rigid-body model, without
+/// the plant's friction loss, which settings.friction_loss gives). Throws std::invalid_argument
+/// naming the setting for vectors of a size other than n (or empty where "auto" or "none" is
+/// allowed).
+HorizonSetup setup_horizon(const Model& model, const ControllerSettings& settings);
 
 }  // namespace idmpc

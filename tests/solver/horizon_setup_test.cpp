@@ -1,0 +1,186 @@
+// setup_horizon's automatic choices (horizon_setup.hpp), each recomputed here from its rule:
+// the friction smoothing velocity ε, the torque weight R, and the implicit damping step of the
+// horizon model and of the plant model. Each case is set up so that the rule's every term
+// matters (asserted, else the case would prove nothing).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/solver/horizon_setup.hpp"
+#include "support/problems.hpp"
+
+namespace idmpc {
+namespace {
+
+const std::string kArm4 = IDMPC_SOURCE_DIR "/mjcf/arm4.xml";
+const std::string kTree = IDMPC_SOURCE_DIR "/mjcf/tree.xml";  // damped joints
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kPlantStep = 1e-3;
+
+// a fixed horizon of N steps over Tf, a start and a target off the zero pose, every weight and
+// ε "auto", everything else the defaults
+ControllerSettings settings_of(const Model& model, double Tf, int N) {
+  ControllerSettings s;
+  s.cgmres.Tf = Tf;
+  s.cgmres.alpha = 0;
+  s.N = N;
+  s.q_start = VecX<double>::LinSpaced(model.n, 0.3, -0.4);
+  s.q_ref = VecX<double>::LinSpaced(model.n, -0.2, 0.5);
+  s.plant_step = kPlantStep;
+  return s;
+}
+
+// max over q_start and q_ref of (M⁻¹)_jj
+VecX<double> inverse_inertia(const Model& model, const ControllerSettings& s) {
+  Data data(model);
+  VecX<double> out = VecX<double>::Zero(model.n);
+  for (const VecX<double>& q : {s.q_start, s.q_ref}) {
+    out = out.cwiseMax(MatX<double>(crba(model, data, q).inverse()).diagonal());
+  }
+  return out;
+}
+
+// ε_j = max(0.1, Δτ·f_j·(M⁻¹)_jj): the largest ε of a stable explicit step, not below 0.1 rad/s
+TEST(HorizonSetup, AutoFrictionVelocityIsTheStepTimesFrictionOverInertia) {
+  const Model model = test::load_problem(kArm4).model;
+  const int n = model.n;
+  ControllerSettings settings = settings_of(model, 1.0, 20);  // Δτ = 0.05 s
+  const VecX<double> f = (VecX<double>(n) << 40.0, 20.0, 10.0, 0.01).finished();
+  settings.friction_loss = f;
+  settings.torque_upper = VecX<double>::Constant(n, 50.0);
+  settings.torque_lower = -settings.torque_upper;
+  const HorizonSetup s = setup_horizon(model, settings);
+
+  const double dtau = settings.cgmres.Tf / settings.N;
+  const VecX<double> minv = inverse_inertia(model, settings);
+  int above = 0;
+  for (int j = 0; j < n; ++j) {
+    const double rule = dtau * f[j] * minv[j];
+    above += rule > 2 * kMinFrictionVelocity;
+    EXPECT_NEAR(s.friction_velocity[j], std::max(kMinFrictionVelocity, rule), 1e-12 * rule) << "joint " << j;
+  }
+  ASSERT_GE(above, 2) << "the step rule must decide ε on some joints, else the case proves nothing";
+  EXPECT_EQ(s.friction_velocity[n - 1], kMinFrictionVelocity) << "the floor on a joint of little friction";
+  // the horizon and the plant model carry the friction with this ε
+  EXPECT_EQ(s.horizon_model->friction, f);
+  EXPECT_EQ(s.horizon_model->friction_velocity, s.friction_velocity);
+  EXPECT_EQ(s.plant_model->friction_velocity, s.friction_velocity);
+}
+
+// R_j = max(10/τ_j², Q_q/(m_j²·ω⁴)), τ_j the half-width of [lower, upper] (one-sided: the bound;
+// none: 2|holding torque| + 20 rad/s²·M_jj), m_j = 1/(M⁻¹)_jj, ω = 0.35/Δτ
+TEST(HorizonSetup, AutoTorqueWeightComesFromTheHalfRangeOrTheHoldingTorque) {
+  const Model model = test::load_problem(kArm4).model;
+  const int n = model.n;
+  ControllerSettings settings = settings_of(model, 0.2, 25);  // Δτ = 8 ms: the step term stays below the range term
+  const VecX<double> zero = VecX<double>::Zero(n);
+  // two asymmetric ranges, one side only, none
+  settings.torque_lower = (VecX<double>(n) << -2.0, -8.0, -kInf, -kInf).finished();
+  settings.torque_upper = (VecX<double>(n) << 6.0, 12.0, 3.0, kInf).finished();
+  const HorizonSetup s = setup_horizon(model, settings);
+
+  Data data(model);
+  const VecX<double> hold = rnea(model, data, settings.q_ref, zero, zero);
+  const VecX<double> inertia = crba(model, data, settings.q_ref).diagonal();
+  const VecX<double> scale = (VecX<double>(n) << 4.0, 10.0, 3.0, 2 * std::abs(hold[3]) + 20 * inertia[3]).finished();
+  const VecX<double> minv = inverse_inertia(model, settings);
+  const double omega = 0.35 / (settings.cgmres.Tf / settings.N);
+  ASSERT_EQ(s.weights.Qq, VecX<double>::Constant(n, 100.0));
+  ASSERT_EQ(s.weights.Qv, VecX<double>::Constant(n, 10.0));
+  int range_decides = 0;
+  for (int j = 0; j < n; ++j) {
+    const double by_range = 10 / (scale[j] * scale[j]);
+    const double by_step = 100 * minv[j] * minv[j] / std::pow(omega, 4);
+    range_decides += by_range > 4 * by_step;
+    EXPECT_NEAR(s.weights.R[j], std::max(by_range, by_step), 1e-12 * by_range) << "joint " << j;
+  }
+  ASSERT_EQ(range_decides, n) << "the range must decide R on every joint, else the case proves nothing";
+}
+
+// the horizon integrates the damping implicitly over its step Δτ when asked (armature + Δτ·D);
+// the plant model (torque rule, observer) always over one plant step (armature + δt·D)
+TEST(HorizonSetup, ImplicitDampingStepsAreTheHorizonsAndThePlants) {
+  const Model model = test::load_problem(kTree).model;
+  ASSERT_GT(model.damping.maxCoeff(), 0.0);
+  const int n = model.n;
+  ControllerSettings settings = settings_of(model, 0.5, 10);  // Δτ = 0.05 s
+  settings.torque_upper = VecX<double>::Constant(n, 10.0);
+  settings.torque_lower = -settings.torque_upper;
+  const double dtau = settings.cgmres.Tf / settings.N;
+
+  settings.implicit_damping = ImplicitDamping::kOn;
+  const HorizonSetup on = setup_horizon(model, settings);
+  EXPECT_TRUE(on.implicit_damping);
+  EXPECT_EQ(on.horizon_model->armature, model.armature + dtau * model.damping);
+  EXPECT_EQ(on.plant_model->armature, model.armature + kPlantStep * model.damping);
+  EXPECT_EQ(on.horizon_model->damping, model.damping);
+
+  settings.implicit_damping = ImplicitDamping::kOff;
+  const HorizonSetup off = setup_horizon(model, settings);
+  EXPECT_FALSE(off.implicit_damping);
+  EXPECT_EQ(off.horizon_model->armature, model.armature);
+  EXPECT_EQ(off.plant_model->armature, model.armature + kPlantStep * model.damping);
+
+  // "auto": implicit exactly when the explicit step is unstable, Δτ·max eig(M⁻¹D) > 1
+  settings.implicit_damping = ImplicitDamping::kAuto;
+  const HorizonSetup quiet = setup_horizon(model, settings);
+  ASSERT_LT(quiet.damping_step_ratio, 1.0);
+  EXPECT_FALSE(quiet.implicit_damping);
+  const double heavy = 2 / quiet.damping_step_ratio;  // the damping that makes the ratio 2
+  std::vector<Link> links;
+  for (int i = 0; i < n; ++i) {
+    links.push_back(model.link(i));
+    links.back().damping *= heavy;
+  }
+  const Model damped(links, model.gravity, model.name);
+  const HorizonSetup loud = setup_horizon(damped, settings);
+  EXPECT_NEAR(loud.damping_step_ratio, 2.0, 1e-9);
+  EXPECT_TRUE(loud.implicit_damping);
+  EXPECT_EQ(loud.horizon_model->armature, damped.armature + dtau * damped.damping);
+  // implicit damping needs a fixed horizon (C/GMRES with α = 0; the Riccati solver's always is)
+  settings.implicit_damping = ImplicitDamping::kOn;
+  settings.cgmres.alpha = 1;
+  EXPECT_THROW(setup_horizon(model, settings), std::invalid_argument);
+  settings.solver = SolverKind::kRiccati;
+  EXPECT_TRUE(setup_horizon(model, settings).implicit_damping);
+}
+
+// Settings the rules cannot use are refused, naming the setting; without friction loss given the
+// model keeps its own friction terms
+TEST(HorizonSetup, RefusesSettingsOfTheWrongSizeAndKeepsTheModelsFriction) {
+  const Model model = test::load_problem(kArm4).model;
+  const int n = model.n;
+  ControllerSettings settings = settings_of(model, 0.5, 10);
+  for (auto [field, name] : {std::pair{&ControllerSettings::q_start, "q_start"},
+                             std::pair{&ControllerSettings::friction_loss, "friction_loss"},
+                             std::pair{&ControllerSettings::friction_velocity, "friction_velocity"}}) {
+    ControllerSettings bad = settings;
+    bad.*field = VecX<double>::Ones(n + 1);
+    try {
+      setup_horizon(model, bad);
+      ADD_FAILURE() << name << " of the wrong size accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  }
+  ControllerSettings bad = settings;
+  bad.weights.R = VecX<double>::Ones(n - 1);
+  EXPECT_THROW(setup_horizon(model, bad), std::invalid_argument);
+  bad = settings;
+  bad.friction_loss = VecX<double>::Constant(n, -1.0);
+  EXPECT_THROW(setup_horizon(model, bad), std::invalid_argument);
+
+  const Model rough = with_joint_friction(model, VecX<double>::Constant(n, 2.0), VecX<double>::Constant(n, 0.3));
+  const HorizonSetup kept = setup_horizon(rough, settings);
+  EXPECT_EQ(kept.horizon_model->friction, rough.friction);
+  EXPECT_EQ(kept.plant_model->friction_velocity, rough.friction_velocity);
+}
+
+}  // namespace
+}  // namespace idmpc
