@@ -1,10 +1,12 @@
 #include "app/swingup.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -140,10 +142,62 @@ Task make_task(const TaskOverrides& o) {
 
 namespace {
 
-SwingupOutcome run_once(const Task& task, const std::string& log_path) {
+// The progress lines of a run: every kProgressPeriod of wall time, from the controller's start
+// (between its iterations) and from the steps
+class Progress {
+ public:
+  using Clock = std::chrono::steady_clock;
+  Progress(const mj::TaskRun& run, double duration, double period)
+      : run_(run),
+        duration_(duration),
+        period_(std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period))),
+        next_(begin_ + period_) {}
+
+  // during the start, before the first step
+  void starting() {
+    if (!due()) return;
+    std::ostringstream o;
+    o << "idmpc: still solving the start at t = 0 (" << std::fixed << std::setprecision(1) << seconds_since(begin_)
+      << " s so far)";
+    std::cerr << o.str() << "\n";
+  }
+  void step(const mj::StepRecord& s) {
+    if (!due()) return;
+    std::ostringstream o;
+    o << "idmpc: t = " << std::setprecision(3) << s.t << " s of " << duration_ << " s (" << std::fixed
+      << std::setprecision(0) << 100 * s.t / duration_ << " %), ";
+    if (s.frame_position && s.frame_target) {
+      o << "frame position error " << std::setprecision(2) << 1e3 * (*s.frame_position - *s.frame_target).norm()
+        << " mm";
+    } else {
+      o << "max|q - qref| " << std::defaultfloat << std::setprecision(3)
+        << (s.q - run_.controller().q_ref()).cwiseAbs().maxCoeff() << " rad";
+    }
+    std::cerr << o.str() << "\n";
+  }
+
+ private:
+  static double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+  bool due() {
+    const Clock::time_point now = Clock::now();
+    if (now < next_) return false;
+    next_ = now + period_;
+    return true;
+  }
+
+  const mj::TaskRun& run_;
+  double duration_;
+  Clock::duration period_;
+  Clock::time_point begin_ = Clock::now();
+  Clock::time_point next_;
+};
+
+SwingupOutcome run_once(const Task& task, const std::string& log_path, const RunMessages& messages) {
   // everything is validated before any output is opened
   mj::TaskRun run(task);
-  for (const auto& w : run.notices()) std::cerr << "idmpc: " << w << "\n";
+  if (messages.notices) {
+    for (const auto& w : run.notices()) std::cerr << "idmpc: " << w << "\n";
+  }
   for (const auto& w : run.warnings()) std::cerr << "idmpc: warning: " << w << "\n";
   const bool limited = (run.torque_lower().array().isFinite() || run.torque_upper().array().isFinite()).any();
 
@@ -154,10 +208,17 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
     log.emplace(log_path);
     writer.emplace(log->stream(), run.n(), limited, run.frame_target().has_value());
   }
+  std::optional<Progress> progress;
+  if (messages.progress_period >= 0) {
+    progress.emplace(run, task.duration, messages.progress_period);
+    run.controller().set_interrupt_check([&progress] { progress->starting(); });
+  }
   auto on_step = [&](const mj::StepRecord& s) {
     if (writer) writer->row(s.t, s.q, s.v, s.u, s.u_commanded, s.residual, s.update_ms, s.frame_position, s.frame_target);
+    if (progress) progress->step(s);
   };
   mj::RunResult result = run.run(on_step);
+  run.controller().set_interrupt_check({});
   if (log) log->commit();
   RunSummary summary = run.summary(result, log_path);
   return SwingupOutcome{std::move(result), std::move(summary)};
@@ -165,8 +226,9 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path) {
 
 }  // namespace
 
-SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback) {
-  SwingupOutcome out = run_once(task, log_path);
+SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback,
+                           const RunMessages& messages) {
+  SwingupOutcome out = run_once(task, log_path, messages);
   if (!(fallback && out.summary.diverged && task.formulation == "id" && without_Qa(task) && task.Qa_fallback > 0)) {
     return out;
   }
@@ -177,7 +239,7 @@ SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool f
   std::cerr << "idmpc: warning: " << said.str() << "\n";
   Task again = task;
   again.Qa = {task.Qa_fallback};
-  out = run_once(again, log_path);
+  out = run_once(again, log_path, messages);
   out.summary.warnings.push_back(said.str());
   return out;
 }

@@ -39,11 +39,23 @@ struct SwingupOutcome {
   RunSummary summary;
 };
 
+/// @brief What a run says on standard error while it runs (warnings always).
+struct RunMessages {
+  bool notices = true;    ///< what the run does with the model and chose by itself, before it starts
+  /// @brief The wall time between two progress lines [s] (how far the run is and how far from its
+  /// target; during a long start, that it is still solving it); 0: at every step and every
+  /// iteration of the start; negative: none.
+  double progress_period = -1;
+};
+/// @brief The default wall time between two progress lines of `swingup` [s].
+inline constexpr double kProgressPeriod = 2.0;
+
 /// @brief Runs the task; streams the CSV log to `log_path` if non-empty (temporary file
 /// renamed when the run ends, diverged or not). Throws on bad settings before any output.
 /// With `fallback`, an ID run with Q_a = 0 that diverges is rerun with the task's
 /// weights.Qa_fallback (the paper's rule); the summary's warnings say so, the log is the rerun's.
-SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback = false);
+SwingupOutcome run_swingup(const Task& task, const std::string& log_path, bool fallback = false,
+                           const RunMessages& messages = {});
 
 /// @brief Writes JSON to a file atomically.
 void write_json(const nlohmann::json& j, const std::string& path);

@@ -28,16 +28,25 @@ void register_swingup(CLI::App& app) {
   struct Options {
     TaskOverrides run;
     std::string log, summary, video;
+    bool quiet = false;
+    double progress = kProgressPeriod;
   };
   auto opt = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
-      "swingup", "One closed-loop run of a task by C/GMRES (FD or ID) with MuJoCo in the loop");
+      "swingup", "One closed-loop run of a task (FD or ID, by C/GMRES or the Riccati solver) with MuJoCo in the loop");
   add_task_options(*sub, opt->run);
   add_data_dir_option(*sub);
   sub->add_option("--log", opt->log, "CSV log, one row per control step")->check(non_empty_path());
   sub->add_option("--summary", opt->summary, "JSON summary")->check(non_empty_path());
   sub->add_option("--video", opt->video, "render the run to this MP4 right after it (1280x720, 30 fps)")
       ->check(non_empty_path());
+  sub->add_option("--progress", opt->progress,
+                  "seconds of wall time between progress lines on standard error (how far the run is and how far "
+                  "from its target; 0: every step; at most a day)")
+      ->check(CLI::Range(0.0, 86400.0));
+  sub->add_flag("--quiet", opt->quiet,
+                "no notices (what the run chose by itself) and no progress lines on standard error; warnings and "
+                "errors stay");
   sub->callback([opt] {
     const Task task = make_task(opt->run);
     // outputs checked before the run: none is an input or another output, a directory or
@@ -77,7 +86,7 @@ void register_swingup(CLI::App& app) {
       log_registration.emplace(log);
       cleanup.path = log;
     }
-    SwingupOutcome out = run_swingup(task, log, opt->run.fallback);
+    SwingupOutcome out = run_swingup(task, log, opt->run.fallback, RunMessages{!opt->quiet, opt->quiet ? -1.0 : opt->progress});
     if (!opt->summary.empty()) write_json(to_json(out.summary), opt->summary);
     std::cout << human_summary(out.summary);
     if (!opt->log.empty()) std::cout << "  log: " << opt->log << "\n";

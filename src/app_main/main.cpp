@@ -120,6 +120,9 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // line by line, also into a pipe or a file: a log of a long command shows each line when it is
+  // said, not at the end (a failed write still sets stdout's error, checked below)
+  std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);
   idmpc::app::install_temporary_file_cleanup();
   const int code = run(argc, argv);
   // what the command printed must have reached its destination

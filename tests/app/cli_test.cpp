@@ -405,6 +405,35 @@ TEST_F(Cli, SwingupWithTheRiccatiSolver) {
   expect_error(idmpc("swingup --task bad.json --duration 0.1"), {"barrier", "-1"});
 }
 
+// While it runs, swingup says how far it is on standard error (--progress: the wall time between
+// lines; 0: every step and every iteration of the start), from the start on; --quiet says neither
+// that nor the notices, and keeps the warnings
+TEST_F(Cli, SwingupSaysHowFarItIsUnlessQuiet) {
+  const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.003 --progress 0");
+  ASSERT_EQ(r.code, 2) << r.err;
+  for (const char* said : {"idmpc: still solving the start at t = 0 (", "idmpc: t = 0.001 s of 0.003 s (33 %), max|q - qref| 3.14 rad",
+                           "idmpc: t = 0.002 s of 0.003 s (67 %)", "no torque limit is declared"}) {
+    EXPECT_NE(r.err.find(said), std::string::npos) << said << " not in: " << r.err;
+  }
+  ASSERT_NE(r.err.find("idmpc: t = 0 s of 0.003 s (0 %)"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.find("still solving the start"), r.err.find("idmpc: t = 0 s"));
+  const Result quiet = idmpc("swingup " + quote(kArm4) + " --duration 0.003 --progress 0 --quiet");
+  ASSERT_EQ(quiet.code, 2) << quiet.err;
+  EXPECT_EQ(quiet.err.find("still solving"), std::string::npos) << quiet.err;
+  EXPECT_EQ(quiet.err.find("idmpc: t = "), std::string::npos) << quiet.err;
+  EXPECT_NE(quiet.err.find("no torque limit is declared"), std::string::npos) << "warnings stay: " << quiet.err;
+  // a frame target: its position error; the notices (servos replaced) unless quiet
+  const std::string circle = quote(std::string(IDMPC_SOURCE_DIR) + "/mjcf/lite6_circle.json");
+  const Result frame = idmpc("swingup --task " + circle + " --duration 0.002 --progress 0");
+  ASSERT_NE(frame.code, 1) << frame.err;
+  EXPECT_NE(frame.err.find("s (50 %), frame position error "), std::string::npos) << frame.err;
+  EXPECT_NE(frame.err.find("servos"), std::string::npos) << frame.err;
+  const Result silent = idmpc("swingup --task " + circle + " --duration 0.002 --quiet");
+  ASSERT_NE(silent.code, 1) << silent.err;
+  EXPECT_EQ(silent.err.find("servos"), std::string::npos) << silent.err;
+  expect_error(idmpc("swingup " + quote(kArm4) + " --progress -1"), {"--progress", "-1"});
+}
+
 TEST_F(Cli, SwingupWritesLogAndSummary) {
   const Result r = idmpc("swingup " + quote(kArm4) + " --duration 0.2 --log log.csv --summary summary.json");
   ASSERT_EQ(r.code, 2) << r.err;
