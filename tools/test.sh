@@ -71,6 +71,9 @@ grep -q "IDMPC_DATA_DIR is not set" "$stage/err" || { cat "$stage/err" >&2; exit
 IDMPC_DATA_DIR=$prefix/share/idmpc "$stage/example/closed_loop"
 # a task file of the user's own needs no data directory: an installed reach task, by path
 env -u IDMPC_DATA_DIR "$stage/example/closed_loop" "$prefix/share/idmpc/mjcf/lite6_reach.json" 200
+# the formulation and the solver chosen on its command line
+env -u IDMPC_DATA_DIR "$stage/example/closed_loop" "$prefix/share/idmpc/mjcf/lite6_reach.json" 200 fd riccati \
+  | grep -q "^riccati (fd) on "
 # the installed command: 0 (reached) or 2 (not reached in 0.2 s) completed the run
 status=0
 env -u IDMPC_DATA_DIR "$prefix/bin/idmpc" swingup --duration 0.2 || status=$?

@@ -1,7 +1,9 @@
-// A MuJoCo loop of your own with an idmpc controller: the controller is built from a task file
-// (model, target, weights, limits) as `idmpc swingup` builds it; the simulation is plain MuJoCo,
-// stepped here. Usage: closed_loop [TASK.json [STEPS]] (default: the paper's swing-up task from
-// idmpc's data directory, IDMPC_DATA_DIR or share/idmpc beside the executable; 1000 steps).
+// A MuJoCo loop of your own with an idmpc controller: the controller's settings come from a task
+// file (model, target, weights, limits, the plant's friction and damping) as `idmpc swingup` makes
+// them, here with the formulation and solver you choose; the simulation is plain MuJoCo, stepped
+// here. Usage: closed_loop [TASK.json [STEPS [fd|id [cgmres|riccati]]]] (default: the paper's
+// swing-up task from idmpc's data directory, IDMPC_DATA_DIR or share/idmpc beside the executable;
+// 1000 steps; the task's formulation and solver).
 #include <cstdlib>
 #include <exception>
 #include <iostream>
@@ -17,7 +19,15 @@ int main(int argc, char** argv) try {
   idmpc::mj::install_error_handlers();
   idmpc::mj::TaskRun run(task);  // throws one line naming the file, field or joint
   for (const std::string& line : run.notices()) std::cout << "note: " << line << "\n";
-  idmpc::Controller& controller = run.controller();
+
+  // the controller `idmpc swingup` would run (run.controller()), or the same settings with
+  // another formulation or solver: one settings type, the "auto" choices made by the controller
+  idmpc::ControllerSettings settings = run.settings();
+  if (argc > 3) settings.formulation = idmpc::parse_formulation(argv[3]);
+  if (argc > 4) settings.solver = idmpc::parse_solver(argv[4]);
+  idmpc::Controller controller(run.shared_model(), settings);
+  std::cout << idmpc::to_string(settings.solver) << " (" << idmpc::to_string(settings.formulation) << ") on "
+            << task.model << "\n";
 
   // your simulation: the task's model (newer MJCF translated for this MuJoCo as idmpc reads it),
   // stepped at the control period, the controller's joint torques applied directly
