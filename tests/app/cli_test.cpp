@@ -580,7 +580,7 @@ TEST_F(Cli, SwingupWarnsAboutUnmodeledFeaturesRangesAndTheTimestep) {
                          " --q0 0 0 0 0 0 5 0 --qref 0 0 0 -4 0 1 0 --dt 0.0015 --duration 0.003 --summary s.json");
   ASSERT_EQ(r.code, 2) << r.err;
   const std::vector<std::string> expected = {
-      "does not model: limit on joint 'joint1'", "q0 of joint 'joint4' of body 'link4' is 0, outside its range",
+      "does not model: range limits on joint(s) 'joint1'…'joint7' (7)", "q0 of joint 'joint4' of body 'link4' is 0, outside its range",
       "q0 of joint 'joint6' of body 'link6' is 5, outside its range", "qref of joint 'joint4' of body 'link4' is -4",
       "timestep 0.001 s is replaced by the control period 0.0015 s"};
   const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));

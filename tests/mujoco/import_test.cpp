@@ -329,8 +329,8 @@ TEST_F(ImportTest, UnmodeledReportListsLimitsContactsTendonsFrictionAndEqualitie
   const mj::ImportedModel imported = mj::import_model(m.get(), "unmodeled.xml");
   const std::string report = joined(imported.unmodeled);
   EXPECT_NE(report.find("contacts"), std::string::npos) << report;
-  EXPECT_NE(report.find("limit on joint 'shoulder' of body 'arm'"), std::string::npos) << report;
-  EXPECT_EQ(report.find("limit on joint 'wrist'"), std::string::npos) << report;
+  EXPECT_NE(report.find("range limits on joint(s) 'shoulder'"), std::string::npos) << report;
+  EXPECT_EQ(report.find("range limits on joint(s) 'shoulder', 'wrist'"), std::string::npos) << report;
   EXPECT_NE(report.find("friction loss on 1 joint(s) ('wrist') as a constraint with stiction"), std::string::npos)
       << report;
   EXPECT_NE(report.find("1 tendon"), std::string::npos) << report;
@@ -363,7 +363,7 @@ TEST_F(ImportTest, ShippedAndRandomModelsHaveNothingUnmodeled) {
   // (mjcf/fr3.xml, ...) their collision geoms and joint friction: plant features the controller
   // does not model (their torque limits, from the actuators, it models)
   const auto allowed = [](const std::string& item) {
-    return item.rfind("limit on joint ", 0) == 0 || item.rfind("contacts (", 0) == 0 ||
+    return item.rfind("range limits on ", 0) == 0 || item.rfind("contacts (", 0) == 0 ||
            item.rfind("friction loss on ", 0) == 0;
   };
   for (const std::string& path : test::shipped_model_paths()) {

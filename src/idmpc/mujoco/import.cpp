@@ -422,8 +422,13 @@ std::vector<std::string> unmodeled_features(const mjModel* m) {
   if (contacts_on && colliding > 1) {
     out.push_back("contacts (" + std::to_string(colliding) + " colliding geoms)");
   }
+  // one line for all joint ranges (a 7-dof arm has seven), the joints named
+  std::vector<std::string> limited;
   for (int j = 0; j < m->njnt; ++j) {
-    if (m->jnt_limited[j]) out.push_back("limit on " + joint_label(m, j));
+    if (m->jnt_limited[j]) limited.push_back(object_name(m, mjOBJ_JOINT, j));
+  }
+  if (!limited.empty()) {
+    out.push_back("range limits on joint(s) " + name_list(limited));
   }
   // friction loss: smooth in the horizon of both formulations; what it is not (stiction) is left
   // to the disturbance observer
