@@ -337,14 +337,20 @@ TEST_F(MjcfTranslate, NoOpValuesAreDroppedAndSaidSo) {
     <body name="upper" pos="0 0 1" gravcomp="0">
       <joint name="shoulder" axis="0 1 0" actuatorgravcomp="false"/>
       <geom type="sphere" size="0.1" mass="1" contype="0" conaffinity="0"/>
-      <camera name="eye" resolution="640 480"/>
+      <camera name="eye" resolution="640 480" focal="0.01 0.01" sensorsize="0.01 0.01"/>
+      <camera name="side" focal="0.02 0.02" orthographic="false"/>
+      <light name="lamp" type="directional" intensity="2"/>
     </body>
   </worldbody>
 </mujoco>)");
   const mj::LoadedModel loaded = mj::load_model_translated(path);
   EXPECT_EQ(loaded.model->njnt, 1);
+  EXPECT_EQ(loaded.model->ncam, 2);
+  EXPECT_EQ(loaded.model->light_directional[0], 1) << "a directional light stays directional";
   for (const std::string part : {"gravcomp=\"0\" dropped", "actuatorgravcomp=\"false\" dropped",
-                                 "eulerdamp=\"enable\" dropped", "camera resolution dropped",
+                                 "eulerdamp=\"enable\" dropped",
+                                 "dropped what MuJoCo 2.2 does not have and only rendering uses: camera focal (2×), "
+                                 "camera orthographic, camera resolution, camera sensorsize, light intensity, light type",
                                  "<compiler assetdir=\".\"> given as meshdir and texturedir"}) {
     expect_one_notice(loaded, part);
   }

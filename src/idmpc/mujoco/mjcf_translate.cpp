@@ -51,6 +51,12 @@ const std::map<std::string, std::string> kNewerAttributes = {
     {"interp", "actuator history (delays) does not exist in MuJoCo 2.2"},
     {"delay", "actuator history (delays) does not exist in MuJoCo 2.2"}};
 
+// attributes of cameras and lights that MuJoCo 2.2 does not have: they change what a camera
+// renders or how a light shines, never the dynamics, and are dropped (said in one notice)
+const std::map<std::string, std::set<std::string>> kRenderOnlyAttributes = {
+    {"camera", {"resolution", "focal", "focalpixel", "principal", "principalpixel", "sensorsize", "orthographic"}},
+    {"light", {"type", "texture", "intensity", "range", "bulbradius"}}};
+
 std::string number(double x) {
   std::ostringstream o;
   o.precision(10);
@@ -485,10 +491,10 @@ class Translator {
           remove_attr_.emplace_back(n, name);
           out_.notices.push_back("<compiler assetdir=\"" + value + "\"> given as meshdir and texturedir (" +
                                  model_.where(n) + ")");
-        } else if (name == "resolution" && tag == "camera") {
+        } else if (kRenderOnlyAttributes.count(tag) && kRenderOnlyAttributes.at(tag).count(name)) {
           remove_attr_.emplace_back(n, name);
-          out_.notices.push_back("camera resolution dropped (" + model_.where(n) +
-                                 "): MuJoCo 2.2 cameras have none and nothing MuJoCo 2.2 computes uses it");
+          if (name == "type" && value == "directional") set_attr_.push_back({n, "directional", "true"});
+          render_only_[tag + " " + name] += 1;
         } else if (name == "gravcomp" && tag == "body" && body_id_.count(n) && std::atof(value.c_str()) != 0) {
           // exact only when it compensates every moving body fully: checked on the compiled model
           remove_attr_.emplace_back(n, name);
@@ -516,6 +522,14 @@ class Translator {
           }
         }
       }
+    }
+    if (!render_only_.empty()) {
+      std::string list;
+      for (const auto& [attribute, count] : render_only_) {
+        list += (list.empty() ? "" : ", ") + attribute + (count > 1 ? " (" + std::to_string(count) + "×)" : "");
+      }
+      out_.notices.push_back("dropped what MuJoCo 2.2 does not have and only rendering uses: " + list +
+                             " (a light's type directional kept as directional=\"true\")");
     }
   }
 
@@ -565,6 +579,7 @@ class Translator {
   std::vector<Assignment> set_attr_;
   std::vector<std::pair<Node*, std::string>> remove_attr_;
   std::vector<Node*> remove_element_;
+  std::map<std::string, int> render_only_;  ///< "<tag> <attribute>" dropped: how often
   bool set_autolimits_ = false;
 };
 
