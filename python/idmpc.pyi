@@ -138,10 +138,10 @@ class FrameTask:
     position: List[float]
     orientation: List[float]
     position_weight: List[float]
-    orientation_weight: float
+    orientation_weight: Optional[float]
     @overload
     def __init__(self, frame: str, position: List[float] = ..., orientation: List[float] = ...,
-                 position_weight: List[float] = ..., orientation_weight: float = 100.0) -> None: ...
+                 position_weight: List[float] = ..., orientation_weight: Optional[float] = None) -> None: ...
     @overload
     def __init__(self, other: FrameTask) -> None: ...
 

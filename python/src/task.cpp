@@ -31,20 +31,21 @@ void bind_task(py::module_& m) {
                         "resolves it on the model (TaskRun.frame_target). List fields are copied out: assign a "
                         "whole list.")
       .def(py::init([](std::string frame, std::vector<double> position, std::vector<double> orientation,
-                       std::vector<double> position_weight, double orientation_weight) {
+                       std::vector<double> position_weight, std::optional<double> orientation_weight) {
              return FrameTask{std::move(frame), std::move(position), std::move(orientation),
                               std::move(position_weight), orientation_weight};
            }),
            py::arg("frame"), py::arg("position") = std::vector<double>{},
            py::arg("orientation") = std::vector<double>{}, py::arg("position_weight") = FrameTask{}.position_weight,
-           py::arg("orientation_weight") = FrameTask{}.orientation_weight)
+           py::arg("orientation_weight") = py::none())
       .def(py::init<const FrameTask&>(), py::arg("other"), "A copy of other.")
       .def_readwrite("frame", &FrameTask::frame, "site or body name")
       .def_readwrite("position", &FrameTask::position, "[x, y, z] world [m]; empty: the frame's position at q0")
       .def_readwrite("orientation", &FrameTask::orientation,
                      "unit quaternion [w, x, y, z]; empty: the frame's orientation at q0")
       .def_readwrite("position_weight", &FrameTask::position_weight, "1 or 3 values [1/m^2]")
-      .def_readwrite("orientation_weight", &FrameTask::orientation_weight)
+      .def_readwrite("orientation_weight", &FrameTask::orientation_weight,
+                     "w_o; None: \"auto\" (100 where the arm can hold any orientation of the frame, else 0)")
       .def("__repr__", [](const FrameTask& t) { return "<idmpc.FrameTask '" + t.frame + "'>"; });
 
   py::class_<Task>(m, "Task",

@@ -251,6 +251,7 @@ def test_circle_task_fields():
     assert isinstance(target, idmpc.FrameTask)
     assert (target.frame, target.position, target.orientation) == ("tip", [], [])
     assert target.position_weight == [1e4] and target.orientation_weight == 100
+    assert idmpc.FrameTask("tip").orientation_weight is None  # not given: "auto"
     assert task.reference == file["reference"]
     assert task.tracking_tolerance == 5e-3
     # fields are copies: assign a whole value

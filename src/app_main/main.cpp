@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <mujoco/mujoco.h>
+#include <sys/stat.h>
 
 #include "app/commands.hpp"
 #include "app/temporary_files.hpp"
@@ -120,9 +121,11 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  // line by line, also into a pipe or a file: a log of a long command shows each line when it is
-  // said, not at the end (a failed write still sets stdout's error, checked below)
-  std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);
+  // line by line into a pipe (`idmpc sweep | tee log`): the log shows each line when it is said,
+  // not at the end (a terminal is line-buffered already; files and devices keep the full buffer,
+  // whose one flush at the end reports a failed write with its reason)
+  struct stat out {};
+  if (fstat(fileno(stdout), &out) == 0 && S_ISFIFO(out.st_mode)) std::setvbuf(stdout, nullptr, _IOLBF, BUFSIZ);
   idmpc::app::install_temporary_file_cleanup();
   const int code = run(argc, argv);
   // what the command printed must have reached its destination

@@ -232,6 +232,33 @@ TEST(TaskRun, FrameTargetAndReferenceErrorsNameTheField) {
             "tracking_tolerance must be positive and finite [m], got -1");
 }
 
+// "auto" orientation weight: weighted where the arm can hold any orientation of the frame (its
+// Jacobian of rank 6, also from a singular start), not on an arm that cannot (a planar arm: rank
+// 3), which is said; a weight given is kept
+TEST(TaskRun, AutoOrientationWeightFollowsWhatTheArmCanHold) {
+  auto notice_of = [](const mj::TaskRun& run) {
+    for (const std::string& n : run.notices()) {
+      if (n.find("orientation not weighted") != std::string::npos) return n;
+    }
+    return std::string();
+  };
+  const mj::TaskRun planar(task_in_mjcf(R"({"model": "arm4.xml", "q0": [0.3, 0.2, 0.1, 0.1], "qref": 0,
+      "duration": 0.01, "target": {"frame": "link3"}})"));
+  EXPECT_EQ(planar.frame_target()->orientation_weight, 0.0);
+  EXPECT_NE(notice_of(planar).find("has rank 3 < 6 with 4 joint(s)"), std::string::npos) << notice_of(planar);
+  // the UR5e stretched out (every joint at 0) is singular there; 0.1 rad beside it it is not
+  const mj::TaskRun stretched(task_in_mjcf(R"({"model": "ur5e.xml", "q0": [0, 0, 0, 0, 0, 0], "qref": 0,
+      "duration": 0.01, "target": {"frame": "tip"}})"));
+  EXPECT_EQ(stretched.frame_target()->orientation_weight, kAutoOrientationWeight);
+  EXPECT_EQ(notice_of(stretched), "");
+  const mj::TaskRun given(task_in_mjcf(R"({"model": "arm4.xml", "q0": [0.3, 0.2, 0.1, 0.1], "qref": 0,
+      "duration": 0.01, "target": {"frame": "link3", "weights": {"orientation": 5}}})"));
+  EXPECT_EQ(given.frame_target()->orientation_weight, 5.0);
+  EXPECT_EQ(notice_of(given), "");
+  EXPECT_EQ(error_of(R"({"model": "ur5e.xml", "target": {"frame": "tip", "weights": {"orientation": "some"}}})"),
+            "task file 't.json', 'target', 'weights': field 'orientation': expected a number or \"auto\", got \"some\"");
+}
+
 // Without a frame target a reference moves the joint target: from home to a pose in 1 s
 // (minimum jerk), the arm following it and at rest on its end; the horizon's stages see the
 // reference at their own times

@@ -191,7 +191,12 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
       const Reader w = g.sub("weights");
       w.known({"position", "orientation"});
       w.get("position", f.position_weight);
-      w.get("orientation", f.orientation_weight);
+      if (w.has("orientation") && !(w.j.at("orientation") == "auto")) {
+        if (!w.j.at("orientation").is_number()) w.bad("orientation", "a number or \"auto\"");
+        double orientation = 0;
+        w.get("orientation", orientation);
+        f.orientation_weight = orientation;
+      }
       if (f.position_weight.size() != 1 && f.position_weight.size() != 3) w.bad("position", "1 or 3 values");
     }
     t.target = f;
@@ -329,7 +334,9 @@ nlohmann::json to_json(const Task& t) {
     j["target"] = {{"frame", f.frame},
                    {"position", f.position.empty() ? json("start") : json(f.position)},
                    {"orientation", f.orientation.empty() ? json("start") : json(f.orientation)},
-                   {"weights", {{"position", f.position_weight}, {"orientation", f.orientation_weight}}}};
+                   {"weights",
+                    {{"position", f.position_weight},
+                     {"orientation", f.orientation_weight ? json(*f.orientation_weight) : json("auto")}}}};
   }
   if (!t.reference.is_null()) j["reference"] = t.reference;
   j["tracking_tolerance"] = t.tracking_tolerance;
@@ -446,7 +453,7 @@ ResolvedTask resolve(const Task& t, int n) {
     finite(Eigen::Map<const VecX<double>>(f.orientation.data(), static_cast<Eigen::Index>(f.orientation.size())),
            "target.orientation");
     std::vector<double> w = f.position_weight;
-    w.push_back(f.orientation_weight);
+    if (f.orientation_weight) w.push_back(*f.orientation_weight);
     non_negative(Eigen::Map<const VecX<double>>(w.data(), static_cast<Eigen::Index>(w.size())),
                  "target.weights (position, orientation)");
     if (!f.orientation.empty()) {

@@ -38,7 +38,7 @@
 ///                  terms (Qq and qref then weigh the posture): {"frame": name, "position":
 ///                  [x, y, z] or "start" (the frame's position at q0), "orientation": [w, x, y, z]
 ///                  or "start", "weights": {"position": a scalar or 3 values [1/m²],
-///                  "orientation": w_o}} (cost.hpp: FrameTarget)
+///                  "orientation": w_o or "auto"}} (cost.hpp: FrameTarget)
 ///   "reference"    a reference that moves (experiment/trajectory_io.hpp: "shape": "circle",
 ///                  "line", "waypoints" or "csv"): the frame target's position with a target,
 ///                  else qref (one value per joint); it starts at the target's start value
@@ -80,8 +80,12 @@ struct FrameTask {
   std::vector<double> position;          ///< world [m]; empty: the frame's position at q0
   std::vector<double> orientation;       ///< unit quaternion (w, x, y, z); empty: at q0
   std::vector<double> position_weight = {1e4};  ///< 1 or 3 values [1/m²]
-  double orientation_weight = 100;
+  /// @brief w_o; none: "auto", kAutoOrientationWeight where the arm can hold any orientation of the
+  /// frame (its Jacobian has rank 6), else 0 (mj::TaskRun decides, and says so)
+  std::optional<double> orientation_weight;
 };
+/// @brief The "auto" orientation weight of a frame target an arm can orient freely.
+inline constexpr double kAutoOrientationWeight = 100;
 
 struct Task {
   std::string source;  ///< the task file it was read from, for messages

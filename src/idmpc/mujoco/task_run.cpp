@@ -3,6 +3,9 @@
 #include "idmpc/dynamics/kinematics.hpp"
 #include "idmpc/experiment/trajectory_io.hpp"
 
+#include <Eigen/SVD>
+
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -26,6 +29,22 @@ ImportOptions import_options(const Task& task, const LoadedModel& loaded) {
   o.joint_force_lower = loaded.joint_force_lower;
   o.joint_force_upper = loaded.joint_force_upper;
   return o;
+}
+
+// the rank of a frame's 6×n Jacobian, the highest at q and at q + 0.1 rad·(1, −1, 1, …)
+int frame_jacobian_rank(const Model& model, FrameKinematics<double>& fk, const VecX<double>& q) {
+  VecX<double> beside = q;
+  for (int j = 0; j < model.n; ++j) beside[j] += j % 2 ? -0.1 : 0.1;
+  int rank = 0;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.n);
+  for (const VecX<double>* at : {static_cast<const VecX<double>*>(&beside), &q}) {  // q last: fk stays at q
+    fk.compute(model, *at);
+    fk.jacobian(J);
+    Eigen::JacobiSVD<MatX<double>> svd(J);
+    svd.setThreshold(1e-6);
+    rank = std::max(rank, static_cast<int>(svd.rank()));
+  }
+  return rank;
 }
 
 std::string joint_list(const std::vector<std::string>& names) {
@@ -76,6 +95,7 @@ TaskRun::TaskRun(const Task& task)
   if (!loaded_.translations.empty()) notices_.push_back(loaded_.notice());
   notices_.insert(notices_.end(), imported_.notices.begin(), imported_.notices.end());
   notices_.insert(notices_.end(), setup.notes.begin(), setup.notes.end());
+  notices_.insert(notices_.end(), auto_notes_.begin(), auto_notes_.end());
   warnings_ = resolved_.warnings;
   if (!unbounded_.empty()) {
     warnings_.push_back("no torque limit is declared for joint(s) " + joint_list(unbounded_) +
@@ -112,9 +132,23 @@ void TaskRun::set_up_references() {
     } else {
       target.position_weight = Eigen::Map<const Vec3<double>>(f.position_weight.data());
     }
-    target.orientation_weight = f.orientation_weight;
     // "start": the frame's pose at q0 (resolve checked the values given)
     FrameKinematics<double> fk(*model_, target.frame);
+    if (f.orientation_weight) {
+      target.orientation_weight = *f.orientation_weight;
+    } else {
+      // "auto": weighted where the arm can hold any orientation of the frame, its Jacobian of rank
+      // 6 (taken where it is highest: at q0 and 0.1 rad beside it on every joint, so that a start
+      // at a singular pose does not decide it)
+      const int rank = frame_jacobian_rank(*model_, fk, resolved_.q0);
+      target.orientation_weight = rank == 6 ? kAutoOrientationWeight : 0.0;
+      if (rank < 6) {
+        auto_notes_.push_back("target orientation not weighted (weights.orientation \"auto\"): the frame's Jacobian "
+                              "has rank " + std::to_string(rank) + " < 6 with " + std::to_string(model_->n) +
+                              " joint(s), the arm cannot hold an arbitrary orientation; give target.weights."
+                              "orientation to weigh what it can");
+      }
+    }
     fk.compute(*model_, resolved_.q0);
     target.position = f.position.empty() ? fk.position() : Vec3<double>(Eigen::Map<const Vec3<double>>(f.position.data()));
     target.rotation = f.orientation.empty()

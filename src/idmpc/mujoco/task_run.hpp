@@ -97,6 +97,7 @@ class TaskRun {
   std::unique_ptr<Plant> plant_;
   std::unique_ptr<Controller> controller_;
   std::vector<std::string> unbounded_, notices_, warnings_;
+  std::vector<std::string> auto_notes_;  ///< the automatic choices made while resolving the task
   std::optional<FrameTarget> frame_target_;
   std::shared_ptr<const Trajectory> reference_;
   TrackingSettings tracking_;
