@@ -78,19 +78,15 @@ class TrackingMeter {
   double position_sq_ = 0, orientation_sq_ = 0;
 };
 
-}  // namespace
-
-double percentile(std::vector<double> x, double p) {
-  if (x.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(x.begin(), x.end());
-  const double pos = p / 100.0 * static_cast<double>(x.size() - 1);
-  const size_t lo = static_cast<size_t>(std::floor(pos));
-  const size_t hi = std::min(lo + 1, x.size() - 1);
-  return x[lo] + (pos - static_cast<double>(lo)) * (x[hi] - x[lo]);
+// the run ends at t, diverged for `reason`
+void record_divergence(RunResult& result, double t, const std::string& reason) {
+  result.diverged = true;
+  result.diverged_at = t;
+  result.divergence_reason = reason;
 }
 
-RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,
-                          const std::function<void(const StepRecord&)>& on_step) {
+// the control steps of a run, its settings checked
+long control_steps(const Controller& controller, const ClosedLoopSettings& settings) {
   const int n = controller.n();
   if (settings.q0.size() != n || settings.v0.size() != n) {
     throw std::invalid_argument("initial state must have " + std::to_string(n) + " entries, got " +
@@ -109,225 +105,326 @@ RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoop
     throw std::invalid_argument("duration " + std::to_string(settings.duration) +
                                 " s is shorter than one control step (dt = " + std::to_string(dt) + " s)");
   }
-  const std::string timestep_warning = plant.set_control_period(dt);
-  RunResult result;
-  if (!timestep_warning.empty()) result.warnings.push_back(timestep_warning);
+  return steps;
+}
+
+// the plant at (q0, v0); false after a MuJoCo error (load.hpp: its handler throws), the run
+// recorded as diverged at the start with nothing to run
+bool reset_plant(Plant& plant, const Controller& controller, const ClosedLoopSettings& settings, RunResult& result) {
   try {
     plant.reset(settings.q0, settings.v0);
   } catch (const std::runtime_error& e) {
-    // a MuJoCo error (load.hpp: its handler throws) at the start: nothing to run
-    result.diverged = true;
-    result.diverged_at = 0;
-    result.divergence_reason = e.what();
+    record_divergence(result, 0, e.what());
     result.final_q = settings.q0;
     result.final_v = settings.v0;
-    result.saturated_steps.assign(static_cast<size_t>(n), 0);
+    result.saturated_steps.assign(static_cast<size_t>(controller.n()), 0);
     result.final_disturbance = controller.disturbance();
-    return result;
+    return false;
   }
-  controller.solver().enable_timing(settings.phase_timing);
+  return true;
+}
 
-  const long kept = std::max(1L, settings.kept_update_times);
-  result.update_ms.reserve(static_cast<size_t>(std::min(steps, kept)));
-  std::mt19937_64 sampler(0x1d3c);  // reservoir sampling beyond `kept`, reproducible
-  VecX<double> q = plant.q(), v = plant.v();
-  TrackingMeter meter(plant.model(), settings.tracking, n);
-  // the task's stage cost at each step's own time (the controller's references are those of its
-  // last update, which latency and the solver's look-ahead h move away from t)
-  const StageTerms& terms = controller.problem().terms();
-  StageTerms::CostScratch cost_scratch = terms.cost_scratch();
-  // the torque applied over the current period; the controller's output applies over the next
-  VecX<double> tau = controller.initialize(q, v), tau_cmd = controller.commanded_torque();
-  result.init_residual = controller.residual_norm();
-  result.saturated_steps.assign(static_cast<size_t>(n), 0);
-  if (!controller.failure().empty()) {
-    // no torque to start with: a divergence at t = 0, nothing applied, nothing logged
-    result.diverged = true;
-    result.diverged_at = 0;
-    result.divergence_reason = controller.failure();
-    result.final_q = q;
-    result.final_v = v;
-    result.final_q_error = meter.joint_error(0, q, controller);
-    result.final_v_norm = v.norm();
-    return result;
-  }
-  double residual_sum = 0, error_sum = 0;
-  UpdateTimes phase_sum;
-  const double period_ms = 1e3 * dt;
+// a run of the closed loop on a reset plant: start, then each control step until the run's end
+// or a divergence, then end; the steps share the measured state, the torques and the sums over
+// the run, and fill in the result
+class ClosedLoop {
+ public:
+  ClosedLoop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,
+             const std::function<void(const StepRecord&)>& on_step, long steps, RunResult& result)
+      : plant_(plant),
+        controller_(controller),
+        settings_(settings),
+        on_step_(on_step),
+        result_(result),
+        n_(controller.n()),
+        dt_(controller.dt()),
+        steps_(steps),
+        kept_(std::max(1L, settings.kept_update_times)),
+        q_(plant.q()),
+        v_(plant.v()),
+        meter_(plant.model(), settings.tracking, n_),
+        terms_(controller.problem().terms()),
+        cost_scratch_(terms_.cost_scratch()),
+        period_ms_(1e3 * dt_),
+        late_(settings.latency.on()),
+        substeps_(plant.substeps()),
+        plant_dt_(dt_ / static_cast<double>(substeps_)) {}
 
-  // compute latency (formulations.md §Compute latency): plant steps are counted in MuJoCo steps δt, `substeps` per
-  // control period; the torque of the last update waits for its arrival, the controller is busy
-  // until control step `free_at`, and the observer learns the mean torque the plant applied since
-  // the last update's measurement
-  const bool late = settings.latency.on();
-  const long substeps = plant.substeps();
-  const double plant_dt = dt / static_cast<double>(substeps);
-  long free_at = 0, arrival = -1, last_update = -1, applied_steps = 0;
-  VecX<double> pending = tau, pending_cmd = tau_cmd, applied_mean = tau;
-  auto applied = [&](const VecX<double>& x, long count) {
-    if (count == 0) return;
-    applied_steps += count;
-    // a running mean, exact while the torque does not change
-    if (applied_steps == count) {
-      applied_mean = x;
-    } else {
-      applied_mean += (x - applied_mean) * (static_cast<double>(count) / static_cast<double>(applied_steps));
+  // the controller initialized at the plant's state, its torque the one applied over the first
+  // period; false when it has none (a divergence at t = 0, nothing applied, nothing logged)
+  bool start() {
+    result_.update_ms.reserve(static_cast<size_t>(std::min(steps_, kept_)));
+    tau_ = controller_.initialize(q_, v_);
+    tau_cmd_ = controller_.commanded_torque();
+    result_.init_residual = controller_.residual_norm();
+    result_.saturated_steps.assign(static_cast<size_t>(n_), 0);
+    if (!controller_.failure().empty()) {
+      record_divergence(result_, 0, controller_.failure());
+      result_.final_q = q_;
+      result_.final_v = v_;
+      result_.final_q_error = meter_.joint_error(0, q_, controller_);
+      result_.final_v_norm = v_.norm();
+      return false;
     }
-  };
+    pending_ = tau_;
+    pending_cmd_ = tau_cmd_;
+    applied_mean_ = tau_;
+    return true;
+  }
 
-  for (long k = 0; k < steps; ++k) {
-    const double t = static_cast<double>(k) * dt;
-    q = plant.q();
-    v = plant.v();
+  // control step k: the plant's state measured, an update unless the controller is busy, the
+  // row logged, the plant stepped over the period; false when the run ends at it (a divergence)
+  bool step(long k) {
+    const double t = static_cast<double>(k) * dt_;
+    q_ = plant_.q();
+    v_ = plant_.v();
     bool tracked = false;
     try {
-      tracked = meter.measure(t, q);
+      tracked = meter_.measure(t, q_);
     } catch (const std::runtime_error& e) {
-      result.diverged = true;
-      result.diverged_at = t;
-      result.divergence_reason = e.what();
-      break;
+      record_divergence(result_, t, e.what());
+      return false;
     }
-    error_sum += meter.joint_error_squared(t, q, controller);
-    const long first = k * substeps;  // the plant step at t
-    if (late && arrival == first) {
-      tau = pending;
-      tau_cmd = pending_cmd;
-      arrival = -1;
-    }
+    error_sum_ += meter_.joint_error_squared(t, q_, controller_);
+    const long first = k * substeps_;  // the plant step at t
+    if (late_ && arrival_ == first) apply_pending();
     // one control update at t: the torque for t + Δt (latency: for when it is computed)
-    const bool updating = !late || k >= free_at;
+    const bool updating = !late_ || k >= free_at_;
     double ms = std::numeric_limits<double>::quiet_NaN();
     bool ok = true;
-    if (updating) {
-      const auto start = std::chrono::steady_clock::now();
-      ok = late && last_update >= 0
-               ? controller.update(t, q, v, static_cast<double>(k - last_update) * dt, applied_mean)
-               : controller.update(t, q, v);
-      ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-      const double compute_ms = settings.latency.kind == Latency::Kind::kFixed ? settings.latency.ms : ms;
-      if (ok && compute_ms > period_ms) ++result.deadline_misses;
-      if (ok && late) {
-        // its torque reaches the plant after the whole plant steps its computation took
-        // at least one plant step (a torque never acts at its own measurement's instant: a compute
-        // time of 0 runs as the paper's timing), and one after the run's end when it would arrive
-        // later (1e19 ms and more do not fit a long)
-        const double ratio = 1e-3 * compute_ms / plant_dt;
-        const long never = steps * substeps + 1;
-        const long delay = !(ratio < static_cast<double>(never))
-                               ? never
-                               : std::max(1L, static_cast<long>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio))));
-        free_at = k + std::max(1L, (delay + substeps - 1) / substeps);
-        ok = controller.aim(dt * (static_cast<double>(delay) / static_cast<double>(substeps)));
-        pending = controller.torque();
-        pending_cmd = controller.commanded_torque();
-        arrival = first + delay;
-        last_update = k;
-        applied_steps = 0;
-      }
-    }
+    if (updating) ok = update(k, t, first, ms);
 
-    std::string reason = ok ? "" : controller.failure();
+    std::string reason = ok ? "" : controller_.failure();
     // the row holds the measured state, the torque applied at t (over [t, t + Δt) unless a late
     // torque arrives within the period) and this update
-    on_step(StepRecord{t, q, v, tau, tau_cmd, controller.residual_norm(), ms, tracked ? &meter.position() : nullptr,
-                       tracked ? &meter.target() : nullptr});
-    result.steps = static_cast<int>(k + 1);
+    on_step_(StepRecord{t, q_, v_, tau_, tau_cmd_, controller_.residual_norm(), ms,
+                        tracked ? &meter_.position() : nullptr, tracked ? &meter_.target() : nullptr});
+    result_.steps = static_cast<int>(k + 1);
     if (reason.empty()) {
-      if (updating) {
-        ++result.updates;
-        result.mean_update_ms += (ms - result.mean_update_ms) / static_cast<double>(result.updates);
-        result.max_update_ms = std::max(result.max_update_ms, ms);
-        if (result.updates <= kept) {
-          result.update_ms.push_back(ms);
-        } else {
-          const auto slot = std::uniform_int_distribution<long>(0, result.updates - 1)(sampler);
-          if (slot < kept) result.update_ms[static_cast<size_t>(slot)] = ms;
-        }
-        residual_sum += controller.residual_norm();
-        result.max_constraint_violation =
-            std::max(result.max_constraint_violation, controller.constraint_violation());
-        const UpdateTimes& ph = controller.solver().last_times();
-        phase_sum.total += ph.total;
-        phase_sum.rollout += ph.rollout;
-        phase_sum.costate += ph.costate;
-        phase_sum.gmres += ph.gmres;
-        result.evaluations_per_update = controller.solver().evaluations();
-      }
-      // the task's stage cost of the measured state and the torque applied from it, every step
-      result.closed_loop_cost += dt * terms.stage_cost_at(t, q, v, tau, cost_scratch);
-      // saturation of the torque applied over this step
-      bool any = false;
-      for (int j = 0; j < n; ++j) {
-        if (tau[j] != tau_cmd[j]) {
-          ++result.saturated_steps[static_cast<size_t>(j)];
-          any = true;
-        }
-      }
-      result.saturated_any += any;
-      bool stepped = false;
-      try {
-        if (!late) {
-          stepped = plant.step(tau, &reason);
-        } else {
-          // a late torque arriving within the period takes over from its plant step on
-          const long switch_at = arrival >= first && arrival < first + substeps ? arrival - first : substeps;
-          stepped = plant.step(tau, static_cast<int>(switch_at), pending, &reason);
-          applied(tau, switch_at);
-          applied(pending, substeps - switch_at);
-          if (switch_at < substeps) {
-            tau = pending;
-            tau_cmd = pending_cmd;
-            arrival = -1;
-          }
-        }
-      } catch (const std::runtime_error& e) {
-        // a MuJoCo error in the step (its handler throws): the run ends here, as on a divergence
-        stepped = false;
-        reason = e.what();
-      }
-      if (!stepped) {
-        // the plant blew up under this torque: reason says how
-      } else if (plant.v().cwiseAbs().maxCoeff() > kMaxSpeed) {
-        reason = "joint speed exceeded 1e4";
-      }
+      if (updating) record_update(ms);
+      record_applied_torque(t);
+      step_plant(first, reason);
     }
     if (!reason.empty()) {
-      result.diverged = true;
-      result.diverged_at = t;
-      result.divergence_reason = reason;
-      break;
+      record_divergence(result_, t, reason);
+      return false;
     }
-    if (!late) {
-      tau = controller.torque();
-      tau_cmd = controller.commanded_torque();
+    if (!late_) {
+      tau_ = controller_.torque();
+      tau_cmd_ = controller_.commanded_torque();
+    }
+    return true;
+  }
+
+  // the means over the run, the state it ends in and its tracking error
+  void end() {
+    const double m = std::max<double>(1.0, static_cast<double>(result_.updates));
+    result_.mean_residual = residual_sum_ / m;
+    result_.mean_phase_ms = UpdateTimes{1e3 * phase_sum_.total / m, 1e3 * phase_sum_.rollout / m,
+                                        1e3 * phase_sum_.costate / m, 1e3 * phase_sum_.gmres / m};
+    // after a divergence the plant may have been reset: the last measured state is the outcome
+    result_.final_q = result_.diverged ? q_ : plant_.q();
+    result_.final_v = result_.diverged ? v_ : plant_.v();
+    const double t_end = static_cast<double>(result_.diverged ? result_.steps - 1 : result_.steps) * dt_;
+    result_.final_q_error = meter_.joint_error(t_end, result_.final_q, controller_);
+    if (!result_.diverged) {
+      try {
+        meter_.measure(t_end, result_.final_q);  // the state the run ends in
+      } catch (const std::runtime_error& e) {
+        record_divergence(result_, t_end, e.what());
+      }
+    }
+    result_.tracking = meter_.result();
+    result_.final_v_norm = result_.final_v.norm();
+    result_.joint_error_rms = std::sqrt(error_sum_ / std::max<double>(1.0, static_cast<double>(result_.steps)));
+    result_.contact_steps = plant_.contact_steps();
+    result_.max_contact_force = plant_.max_contact_force();
+    result_.final_disturbance = controller_.disturbance();
+  }
+
+ private:
+  // the control update at step k (time t, plant step `first`), its wall time in `ms`; false when
+  // it failed
+  bool update(long k, double t, long first, double& ms) {
+    const auto start = std::chrono::steady_clock::now();
+    bool ok = late_ && last_update_ >= 0
+                  ? controller_.update(t, q_, v_, static_cast<double>(k - last_update_) * dt_, applied_mean_)
+                  : controller_.update(t, q_, v_);
+    ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    const double compute_ms = settings_.latency.kind == Latency::Kind::kFixed ? settings_.latency.ms : ms;
+    if (ok && compute_ms > period_ms_) ++result_.deadline_misses;
+    if (ok && late_) ok = send_late(k, first, compute_ms);
+    return ok;
+  }
+
+  // with latency: the torque of the update at step k, computed in `compute_ms`, becomes the
+  // pending one and the controller busy until it arrives; false when aiming it failed
+  bool send_late(long k, long first, double compute_ms) {
+    // its torque reaches the plant after the whole plant steps its computation took
+    // at least one plant step (a torque never acts at its own measurement's instant: a compute
+    // time of 0 runs as the paper's timing), and one after the run's end when it would arrive
+    // later (1e19 ms and more do not fit a long)
+    const double ratio = 1e-3 * compute_ms / plant_dt_;
+    const long never = steps_ * substeps_ + 1;
+    const long delay = !(ratio < static_cast<double>(never))
+                           ? never
+                           : std::max(1L, static_cast<long>(std::ceil(ratio - 1e-9 * std::max(1.0, ratio))));
+    free_at_ = k + std::max(1L, (delay + substeps_ - 1) / substeps_);
+    const bool ok = controller_.aim(dt_ * (static_cast<double>(delay) / static_cast<double>(substeps_)));
+    pending_ = controller_.torque();
+    pending_cmd_ = controller_.commanded_torque();
+    arrival_ = first + delay;
+    last_update_ = k;
+    applied_steps_ = 0;
+    return ok;
+  }
+
+  // with latency: the pending torque has arrived and is applied from now on
+  void apply_pending() {
+    tau_ = pending_;
+    tau_cmd_ = pending_cmd_;
+    arrival_ = -1;
+  }
+
+  // the figures of a successful update that took `ms`
+  void record_update(double ms) {
+    ++result_.updates;
+    result_.mean_update_ms += (ms - result_.mean_update_ms) / static_cast<double>(result_.updates);
+    result_.max_update_ms = std::max(result_.max_update_ms, ms);
+    if (result_.updates <= kept_) {
+      result_.update_ms.push_back(ms);
+    } else {
+      const auto slot = std::uniform_int_distribution<long>(0, result_.updates - 1)(sampler_);
+      if (slot < kept_) result_.update_ms[static_cast<size_t>(slot)] = ms;
+    }
+    residual_sum_ += controller_.residual_norm();
+    result_.max_constraint_violation = std::max(result_.max_constraint_violation, controller_.constraint_violation());
+    const UpdateTimes& ph = controller_.solver().last_times();
+    phase_sum_.total += ph.total;
+    phase_sum_.rollout += ph.rollout;
+    phase_sum_.costate += ph.costate;
+    phase_sum_.gmres += ph.gmres;
+    result_.evaluations_per_update = controller_.solver().evaluations();
+  }
+
+  // the cost and the saturation of the torque applied over the step at t
+  void record_applied_torque(double t) {
+    // the task's stage cost of the measured state and the torque applied from it, every step
+    result_.closed_loop_cost += dt_ * terms_.stage_cost_at(t, q_, v_, tau_, cost_scratch_);
+    // saturation of the torque applied over this step
+    bool any = false;
+    for (int j = 0; j < n_; ++j) {
+      if (tau_[j] != tau_cmd_[j]) {
+        ++result_.saturated_steps[static_cast<size_t>(j)];
+        any = true;
+      }
+    }
+    result_.saturated_any += any;
+  }
+
+  // the plant stepped over the control period from plant step `first`; `reason` says why when it
+  // blew up
+  void step_plant(long first, std::string& reason) {
+    bool stepped = false;
+    try {
+      if (!late_) {
+        stepped = plant_.step(tau_, &reason);
+      } else {
+        stepped = step_plant_late(first, reason);
+      }
+    } catch (const std::runtime_error& e) {
+      // a MuJoCo error in the step (its handler throws): the run ends here, as on a divergence
+      stepped = false;
+      reason = e.what();
+    }
+    if (!stepped) {
+      // the plant blew up under this torque: reason says how
+    } else if (plant_.v().cwiseAbs().maxCoeff() > kMaxSpeed) {
+      reason = "joint speed exceeded 1e4";
     }
   }
 
-  const double m = std::max<double>(1.0, static_cast<double>(result.updates));
-  result.mean_residual = residual_sum / m;
-  result.mean_phase_ms = UpdateTimes{1e3 * phase_sum.total / m, 1e3 * phase_sum.rollout / m,
-                                     1e3 * phase_sum.costate / m, 1e3 * phase_sum.gmres / m};
-  // after a divergence the plant may have been reset: the last measured state is the outcome
-  result.final_q = result.diverged ? q : plant.q();
-  result.final_v = result.diverged ? v : plant.v();
-  const double t_end = static_cast<double>(result.diverged ? result.steps - 1 : result.steps) * dt;
-  result.final_q_error = meter.joint_error(t_end, result.final_q, controller);
-  if (!result.diverged) {
-    try {
-      meter.measure(t_end, result.final_q);  // the state the run ends in
-    } catch (const std::runtime_error& e) {
-      result.diverged = true;
-      result.diverged_at = t_end;
-      result.divergence_reason = e.what();
+  // with latency: a late torque arriving within the period takes over from its plant step on
+  bool step_plant_late(long first, std::string& reason) {
+    const long switch_at = arrival_ >= first && arrival_ < first + substeps_ ? arrival_ - first : substeps_;
+    const bool stepped = plant_.step(tau_, static_cast<int>(switch_at), pending_, &reason);
+    count_applied(tau_, switch_at);
+    count_applied(pending_, substeps_ - switch_at);
+    if (switch_at < substeps_) apply_pending();
+    return stepped;
+  }
+
+  // with latency: `count` more plant steps under the torque x in the mean torque the plant applied
+  // since the last update's measurement (what the observer learns)
+  void count_applied(const VecX<double>& x, long count) {
+    if (count == 0) return;
+    applied_steps_ += count;
+    // a running mean, exact while the torque does not change
+    if (applied_steps_ == count) {
+      applied_mean_ = x;
+    } else {
+      applied_mean_ += (x - applied_mean_) * (static_cast<double>(count) / static_cast<double>(applied_steps_));
     }
   }
-  result.tracking = meter.result();
-  result.final_v_norm = result.final_v.norm();
-  result.joint_error_rms = std::sqrt(error_sum / std::max<double>(1.0, static_cast<double>(result.steps)));
-  result.contact_steps = plant.contact_steps();
-  result.max_contact_force = plant.max_contact_force();
-  result.final_disturbance = controller.disturbance();
+
+  Plant& plant_;
+  Controller& controller_;
+  const ClosedLoopSettings& settings_;
+  const std::function<void(const StepRecord&)>& on_step_;
+  RunResult& result_;
+  const int n_;
+  const double dt_;
+  const long steps_;
+  const long kept_;                   // update times kept, beyond them a sample (RunResult::update_ms)
+  std::mt19937_64 sampler_{0x1d3c};  // reservoir sampling beyond `kept_`, reproducible
+  VecX<double> q_, v_;                // the state measured at the current step
+  TrackingMeter meter_;
+  // the task's stage cost at each step's own time (the controller's references are those of its
+  // last update, which latency and the solver's look-ahead h move away from t)
+  const StageTerms& terms_;
+  StageTerms::CostScratch cost_scratch_;
+  // the torque applied over the current period; the controller's output applies over the next
+  VecX<double> tau_, tau_cmd_;
+  double residual_sum_ = 0, error_sum_ = 0;
+  UpdateTimes phase_sum_;
+  const double period_ms_;
+
+  // compute latency (formulations.md §Compute latency): plant steps are counted in MuJoCo steps δt,
+  // `substeps_` per control period; the torque of the last update waits for its arrival, the
+  // controller is busy until control step `free_at_`, and the observer learns the mean torque the
+  // plant applied since the last update's measurement
+  const bool late_;
+  const long substeps_;
+  const double plant_dt_;
+  long free_at_ = 0, arrival_ = -1, last_update_ = -1, applied_steps_ = 0;
+  VecX<double> pending_, pending_cmd_, applied_mean_;
+};
+
+}  // namespace
+
+double percentile(std::vector<double> x, double p) {
+  if (x.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(x.begin(), x.end());
+  const double pos = p / 100.0 * static_cast<double>(x.size() - 1);
+  const size_t lo = static_cast<size_t>(std::floor(pos));
+  const size_t hi = std::min(lo + 1, x.size() - 1);
+  return x[lo] + (pos - static_cast<double>(lo)) * (x[hi] - x[lo]);
+}
+
+RunResult run_closed_loop(Plant& plant, Controller& controller, const ClosedLoopSettings& settings,
+                          const std::function<void(const StepRecord&)>& on_step) {
+  const long steps = control_steps(controller, settings);
+  const std::string timestep_warning = plant.set_control_period(controller.dt());
+  RunResult result;
+  if (!timestep_warning.empty()) result.warnings.push_back(timestep_warning);
+  if (!reset_plant(plant, controller, settings, result)) return result;
+  controller.solver().enable_timing(settings.phase_timing);
+  ClosedLoop loop(plant, controller, settings, on_step, steps, result);
+  if (!loop.start()) return result;
+  for (long k = 0; k < steps; ++k) {
+    if (!loop.step(k)) break;
+  }
+  loop.end();
   return result;
 }
 
