@@ -110,6 +110,17 @@ void find_data_dir() {
 }  // namespace idmpc::python
 
 PYBIND11_MODULE(idmpc, m) {
+  // numpy first: the bindings cannot be made without it, and pybind11 would only say
+  // "initialization failed"
+  try {
+    pybind11::module_::import("numpy");
+  } catch (pybind11::error_already_set&) {
+    const std::string python = pybind11::module_::import("sys").attr("executable").cast<std::string>();
+    throw pybind11::import_error("idmpc needs numpy, which this interpreter (" + python +
+                                 ") cannot import: run it with " IDMPC_PYTHON_EXECUTABLE
+                                 ", the interpreter idmpc was built for (numpy from Debian's python3-numpy), "
+                                 "or install numpy for this one");
+  }
   m.doc() = "idmpc: nonlinear MPC of robot arms (forward- and inverse-dynamics formulations, C/GMRES) "
             "with MuJoCo as plant";
   m.attr("__version__") = IDMPC_VERSION;

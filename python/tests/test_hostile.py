@@ -135,6 +135,18 @@ def test_ctrl_c_interrupts_a_long_start():
         assert time.monotonic() - start < 5
 
 
+def test_without_numpy_the_import_error_says_what_to_do():
+    # an interpreter that cannot import numpy (here: made so), as a python3 first on PATH may be
+    code, out = child("""
+        import sys
+        sys.modules["numpy"] = None
+        import idmpc
+        """)
+    assert code != 0
+    assert "ImportError: idmpc needs numpy, which this interpreter (" in out, out
+    assert "the interpreter idmpc was built for" in out, out
+
+
 def test_a_failed_debug_check_raises_instead_of_aborting():
     code, out = child("""
         import idmpc
