@@ -1,7 +1,8 @@
 #!/usr/bin/env -S /usr/bin/python3
 """Writes the main job's Markdown report from the swing-up summaries and logs.
 
-Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix_paper,matrix,adjoint}.{json,csv}; writes report.md)
+Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix_paper,matrix,adjoint,riccati}.{json,csv};
+writes report.md)
 """
 import json
 import math
@@ -65,6 +66,12 @@ def main():
             if not os.path.exists(path):
                 sys.exit(f"report.py: missing summary '{path}'")
             runs[(f, d)] = read_summary(path)
+    riccati = {}
+    for f in ("fd", "id"):
+        path = os.path.join(out_dir, f"swingup_{f}_riccati.json")
+        if not os.path.exists(path):
+            sys.exit(f"report.py: missing summary '{path}'")
+        riccati[f] = read_summary(path)
     lines = ["# idmpc: the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s)", ""]
     lines += [f"Machine: {cpu_model()}, {os.cpu_count()} cores; {compiler()}; Release build "
               "(`-O3`, `-march=native` for this job).", ""]
@@ -76,6 +83,11 @@ def main():
         lines.append(f"| C/GMRES ({f.upper()}) | {dict(VARIANTS)[d]} | {div} | {s['mean_update_ms']:.3f} | "
                      f"{s['p50_update_ms']:.3f} | {s['p95_update_ms']:.3f} | {s['evaluations_per_update']} | "
                      f"{s['final_q_error']:.2e} | {s['final_v_norm']:.2e} | {s['mean_residual']:.2e} |")
+    for f, s in riccati.items():
+        div = f"yes, at {s['diverged_at']:.3f} s" if s["diverged"] else "no"
+        lines.append(f"| Riccati SQP-RTI ({f.upper()}) | matrix (stage Jacobians) | {div} | {s['mean_update_ms']:.3f} | "
+                     f"{s['p50_update_ms']:.3f} | {s['p95_update_ms']:.3f} | {s['evaluations_per_update']} | "
+                     f"{s['final_q_error']:.2e} | {s['final_v_norm']:.2e} | {s['mean_residual']:.2e} (KKT) |")
     paper = {c["formulation"]: c["ms"] for c in load_paper_tables()
              if c["table"] == "12" and c["N"] == 25 and c["kmax"] == 10}
     lines += ["", "Ratio ID/FD of the mean (p50) time per update, measured side by side in this run:", ""]
@@ -84,6 +96,12 @@ def main():
         lines.append(f"- {name}: {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
                      f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); the paper (N = 25, kmax = 10): "
                      f"{paper['id']}/{paper['fd']} = {paper['id'] / paper['fd']:.2f}")
+    fd, idd = riccati["fd"], riccati["id"]
+    lines.append(f"- Riccati SQP-RTI (one Gauss–Newton iteration per update, the horizon fixed at T_f): "
+                 f"{idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
+                 f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}): there both formulations pay the same stage "
+                 "Jacobians and recursion, and ID saves only the ABA derivatives and the dense dynamics products "
+                 "(docs/solvers.md)")
     lines += ["", "Same control from both formulations (Q_a = 0): relative RMS difference of the torque "
               "histories, RMS of |u_ID − u_FD| over RMS of |u_FD|:", ""]
     for d, name in VARIANTS:
@@ -92,7 +110,8 @@ def main():
         lines.append(f"- {name}: whole run {torque_agreement(a, b):.3f}, after the first 0.5 s "
                      f"{torque_agreement(a, b, 0.5):.4f}; largest joint-angle difference "
                      f"{max_angle_difference(a, b):.3g} rad")
-    lines += ["", "Outputs: `fig2.png` (the paper's Fig. 2, FD and ID overlaid), "
+    lines += ["", "Outputs: `fig2.png` (the paper's Fig. 2, FD and ID overlaid; `fig2_riccati.png` the same "
+              "under the Riccati solver), "
               "`swingup_fd_vs_id.mp4` (both arms overlaid), the logs `swingup_*.csv` and summaries "
               "`swingup_*.json`.", ""]
     tmp = os.path.join(out_dir, ".report.md.tmp")

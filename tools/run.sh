@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The README's main command: installs dependencies, builds idmpc (Release, -march=native), runs
 # the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s) with both formulations and both
-# derivative modes, then writes into results/: logs, summaries, the Fig. 2 plot, the FD-vs-ID
-# video and a short report.
+# derivative modes, and under the Riccati solver, then writes into results/: logs, summaries, the
+# Fig. 2 plots (C/GMRES, Riccati), the FD-vs-ID video and a short report.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 results=${IDMPC_RESULTS:-$here/results}
@@ -29,9 +29,20 @@ for v in matrix_paper matrix adjoint; do
   done
 done
 
+# the same swing-up under the other solver family: Gauss-Newton SQP with a Riccati recursion, one
+# iteration per update (docs/solvers.md)
+for f in fd id; do
+  echo "== swing-up: Riccati SQP-RTI (${f^^})"
+  "$idmpc" swingup "$model" --solver riccati --formulation "$f" \
+    --log "$results/swingup_${f}_riccati.csv" --summary "$results/swingup_${f}_riccati.json"
+done
+
 echo "== Fig. 2"
 /usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
   --labels "C/GMRES (FD)" "C/GMRES (ID)" --residual -o "$results/fig2.png"
+
+/usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_riccati.csv" "$results/swingup_id_riccati.csv" \
+  --labels "Riccati (FD)" "Riccati (ID)" --residual -o "$results/fig2_riccati.png"
 
 echo "== video"
 "$idmpc" render "$model" --compare "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
@@ -40,4 +51,4 @@ echo "== video"
 echo "== report"
 /usr/bin/python3 "$here/tools/report.py" "$results"
 echo
-echo "results in $results: report.md, fig2.png, swingup_fd_vs_id.mp4, swingup_*.csv, swingup_*.json"
+echo "results in $results: report.md, fig2.png, fig2_riccati.png, swingup_fd_vs_id.mp4, swingup_*.csv, swingup_*.json"
