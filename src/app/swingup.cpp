@@ -162,7 +162,12 @@ class Progress {
     std::cerr << o.str() << "\n";
   }
   void step(const mj::StepRecord& s) {
+    if (steps_++ == 0) window_ = Clock::now();  // the rate counts from the first step, not the start
     if (!due()) return;
+    const double wall = seconds_since(window_);
+    const double rate = wall > 0 ? static_cast<double>(steps_ - window_steps_) / wall : 0.0;
+    window_ = Clock::now();
+    window_steps_ = steps_;
     std::ostringstream o;
     o << "idmpc: t = " << std::setprecision(3) << s.t << " s of " << duration_ << " s (" << std::fixed
       << std::setprecision(0) << 100 * s.t / duration_ << " %), ";
@@ -173,6 +178,7 @@ class Progress {
       o << "max|q - qref| " << std::defaultfloat << std::setprecision(3)
         << (s.q - run_.controller().q_ref()).cwiseAbs().maxCoeff() << " rad";
     }
+    o << ", " << std::fixed << std::setprecision(0) << rate << " steps/s";
     std::cerr << o.str() << "\n";
   }
 
@@ -190,6 +196,8 @@ class Progress {
   Clock::duration period_;
   Clock::time_point begin_ = Clock::now();
   Clock::time_point next_;
+  Clock::time_point window_;  ///< since the last progress line (or the first step): the rate's window
+  long steps_ = 0, window_steps_ = 0;
 };
 
 SwingupOutcome run_once(const Task& task, const std::string& log_path, const RunMessages& messages) {

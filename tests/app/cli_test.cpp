@@ -416,6 +416,8 @@ TEST_F(Cli, SwingupSaysHowFarItIsUnlessQuiet) {
     EXPECT_NE(r.err.find(said), std::string::npos) << said << " not in: " << r.err;
   }
   ASSERT_NE(r.err.find("idmpc: t = 0 s of 0.003 s (0 %)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(" rad, "), std::string::npos) << "then the control steps per second of wall time: " << r.err;
+  EXPECT_NE(r.err.find(" steps/s\n"), std::string::npos) << r.err;
   EXPECT_LT(r.err.find("still solving the start"), r.err.find("idmpc: t = 0 s"));
   const Result quiet = idmpc("swingup " + quote(kArm4) + " --duration 0.003 --progress 0 --quiet");
   ASSERT_EQ(quiet.code, 2) << quiet.err;
