@@ -32,12 +32,13 @@ ImportOptions import_options(const Task& task, const LoadedModel& loaded) {
 }
 
 // the rank of a frame's 6×n Jacobian, the highest at q and at q + 0.1 rad·(1, −1, 1, …)
-int frame_jacobian_rank(const Model& model, FrameKinematics<double>& fk, const VecX<double>& q) {
+int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<double>& q) {
   VecX<double> beside = q;
   for (int j = 0; j < model.n; ++j) beside[j] += j % 2 ? -0.1 : 0.1;
+  FrameKinematics<double> fk(model, frame);
   int rank = 0;
   Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.n);
-  for (const VecX<double>* at : {static_cast<const VecX<double>*>(&beside), &q}) {  // q last: fk stays at q
+  for (const VecX<double>* at : {&q, static_cast<const VecX<double>*>(&beside)}) {
     fk.compute(model, *at);
     fk.jacobian(J);
     Eigen::JacobiSVD<MatX<double>> svd(J);
@@ -132,15 +133,13 @@ void TaskRun::set_up_references() {
     } else {
       target.position_weight = Eigen::Map<const Vec3<double>>(f.position_weight.data());
     }
-    // "start": the frame's pose at q0 (resolve checked the values given)
-    FrameKinematics<double> fk(*model_, target.frame);
     if (f.orientation_weight) {
       target.orientation_weight = *f.orientation_weight;
     } else {
       // "auto": weighted where the arm can hold any orientation of the frame, its Jacobian of rank
       // 6 (taken where it is highest: at q0 and 0.1 rad beside it on every joint, so that a start
       // at a singular pose does not decide it)
-      const int rank = frame_jacobian_rank(*model_, fk, resolved_.q0);
+      const int rank = frame_jacobian_rank(*model_, target.frame, resolved_.q0);
       target.orientation_weight = rank == 6 ? kAutoOrientationWeight : 0.0;
       if (rank < 6) {
         auto_notes_.push_back("target orientation not weighted (weights.orientation \"auto\"): the frame's Jacobian "
@@ -149,6 +148,8 @@ void TaskRun::set_up_references() {
                               "orientation to weigh what it can");
       }
     }
+    // "start": the frame's pose at q0 (resolve checked the values given)
+    FrameKinematics<double> fk(*model_, target.frame);
     fk.compute(*model_, resolved_.q0);
     target.position = f.position.empty() ? fk.position() : Vec3<double>(Eigen::Map<const Vec3<double>>(f.position.data()));
     target.rotation = f.orientation.empty()
@@ -232,18 +233,19 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.max_contact_force = result.max_contact_force;
   s.final_disturbance.assign(result.final_disturbance.data(),
                              result.final_disturbance.data() + result.final_disturbance.size());
-  s.implicit_damping = horizon().implicit_damping;
-  s.friction_velocity.assign(horizon().friction_velocity.data(), horizon().friction_velocity.data() + n);
-  s.Qq.assign(horizon().weights.Qq.data(), horizon().weights.Qq.data() + n);
-  s.Qv.assign(horizon().weights.Qv.data(), horizon().weights.Qv.data() + n);
-  s.R.assign(horizon().weights.R.data(), horizon().weights.R.data() + n);
+  const HorizonSetup& chosen = horizon();
+  s.implicit_damping = chosen.implicit_damping;
+  s.friction_velocity.assign(chosen.friction_velocity.data(), chosen.friction_velocity.data() + n);
+  s.Qq.assign(chosen.weights.Qq.data(), chosen.weights.Qq.data() + n);
+  s.Qv.assign(chosen.weights.Qv.data(), chosen.weights.Qv.data() + n);
+  s.R.assign(chosen.weights.R.data(), chosen.weights.R.data() + n);
   s.unbounded_joints = unbounded_;
   s.torque_lower.assign(lower_.data(), lower_.data() + n);
   s.torque_upper.assign(upper_.data(), upper_.data() + n);
   s.saturated_steps = result.saturated_steps;
   s.saturated_any = result.saturated_any;
   s.max_constraint_violation = result.max_constraint_violation;
-  if (s.diverged) s.divergence_hint = divergence_hint(task_, horizon().damping_step_ratio);
+  if (s.diverged) s.divergence_hint = divergence_hint(task_, chosen.damping_step_ratio);
   s.model_hash = file_hash(task_.model);  // render checks a log's model and summary by these
   s.log_hash = file_hash(log_path);
   return s;
