@@ -48,6 +48,9 @@ void bind_model(py::module_& m) {
       .def_readonly("name", &Model::name, "the source, for messages")
       .def_readonly("joint_names", &Model::joint_names)
       .def_readonly("parent", &Model::parent, "parent link of each link, -1 for the fixed base")
+      .def_readonly("actuated_joints", &Model::actuated_joints, "the joints an actuator drives, increasing")
+      .def_readonly("unactuated_joints", &Model::unactuated_joints,
+                    "the passive joints no actuator drives (an under-actuated model), increasing")
       .def_property_readonly(
           "joint_types",
           [](const Model& model) {

@@ -151,9 +151,9 @@ UNDER_ACTUATED = """<mujoco><worldbody><body name="b"><joint name="j1" axis="0 1
 def test_direct_torque_options_reach_the_import(tmp_path):
     path = tmp_path / "two.xml"
     path.write_text(UNDER_ACTUATED)
-    with pytest.raises(ValueError, match="under-actuated: joint 'j2'"):
-        idmpc.load_model(str(path))
-    with pytest.raises(ValueError, match="actuate-every-joint"):
-        idmpc.load_model(str(path), direct_torque=True)
+    # without the confirmation j2 stays passive (an under-actuated model)
+    assert idmpc.load_model(str(path)).unactuated_joints == [1]
+    assert idmpc.load_model(str(path), direct_torque=True).unactuated_joints == [1]
     model = idmpc.load_model(str(path), direct_torque=True, actuate_every_joint=True)
+    assert model.unactuated_joints == []
     assert model.joint_names == ["j1", "j2"]

@@ -29,10 +29,12 @@ void print_summary(const mjModel* m, const mj::ImportedModel& imported, const st
     const Vec3<double>& s = model.axis[i];
     // a hinge moves by an angle under a torque, a slide by a length under a force
     const bool hinge = model.joint_type[i] == JointType::kRevolute;
-    std::printf("  %2d %-16s %-6s axis (%+.3f %+.3f %+.3f)  parent %2d  mass %.4g  q [%s], tau [%s]%s\n",
+    const bool actuated = model.link(i).actuated;
+    std::printf("  %2d %-16s %-6s axis (%+.3f %+.3f %+.3f)  parent %2d  mass %.4g  q [%s], tau [%s]%s%s\n",
                 i, model.joint_names[i].c_str(), hinge ? "hinge" : "slide", s.x(), s.y(), s.z(),
                 model.parent[i], model.I[i].m, hinge ? "rad" : "m", hinge ? "N m" : "N",
-                model.armature[i] || model.damping[i] || model.stiffness[i] ? "  (passive/armature)" : "");
+                model.armature[i] || model.damping[i] || model.stiffness[i] ? "  (passive/armature)" : "",
+                actuated ? "" : "  UNACTUATED");
   }
   if (actuation_problem.empty()) {
     std::printf("actuation: %s\n", imported.actuation.summary().c_str());

@@ -1446,10 +1446,11 @@ const std::string kAcrobotModel = slurp(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures
 TEST_F(Cli, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
   write("acrobot.xml", kAcrobotModel);
   write("states.csv", "0.1,0.2,0,0,0.5,0.5\n");
-  const Result refused = idmpc("dynamics acrobot.xml --in states.csv --out out.csv --direct-torque");
-  expect_error(refused, {"under-actuated", "'shoulder'", "--actuate-every-joint"});
-  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
-  EXPECT_FALSE(fs::exists(dir_ / "out.csv"));
+  // without the confirmation the shoulder stays passive, and the command says so
+  const Result passive = idmpc("dynamics acrobot.xml --in states.csv --out out.csv --direct-torque");
+  EXPECT_EQ(passive.code, 0) << passive.err;
+  EXPECT_NE(passive.err.find("under-actuated: joint(s) 'shoulder' have no actuator"), std::string::npos)
+      << passive.err;
   const Result confirmed =
       idmpc("dynamics acrobot.xml --in states.csv --out out.csv --direct-torque --actuate-every-joint");
   EXPECT_EQ(confirmed.code, 0) << confirmed.err;
@@ -1459,13 +1460,16 @@ TEST_F(Cli, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
   EXPECT_NE(checked.out.find("joints without an actuator driven too: 'shoulder'"), std::string::npos) << checked.out;
 }
 
-// check compares the dynamics, which need no actuators: it reports what it found instead of
-// refusing
-TEST_F(Cli, CheckReportsActuatorsTheControllerCannotUseAndStillCompares) {
+// check names the passive joints of an under-actuated model, and compares its dynamics; actuators
+// the controller cannot use are reported instead of refused
+TEST_F(Cli, CheckNamesUnactuatedJointsAndReportsActuatorsTheControllerCannotUse) {
   write("acrobot.xml", kAcrobotModel);
   const Result r = idmpc("check acrobot.xml --samples 2");
   EXPECT_EQ(r.code, 0) << r.err;
-  EXPECT_NE(r.out.find("actuation: not usable by the controller as it is (model 'acrobot.xml' is under-actuated"),
+  EXPECT_NE(r.out.find("under-actuated: joint(s) 'shoulder' have no actuator"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("shoulder         hinge"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("UNACTUATED"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("elbow            hinge  axis (+0.000 +1.000 +0.000)  parent  0  mass 1  q [rad], tau [N m]  UNACTUATED"),
             std::string::npos)
       << r.out;
   EXPECT_NE(r.out.find("all 16 checks passed"), std::string::npos) << r.out;

@@ -183,25 +183,41 @@ TEST_F(ImportTest, FreeJointIsRejectedNamingJointAndBody) {
                                              {"float", "floating_base", "free", "free.xml"});
 }
 
-TEST_F(ImportTest, UnderActuatedModelIsRejectedNamingTheBareJoint) {
+// a joint without a motor is passive: the model is under-actuated, the plant leaves the joint alone
+TEST_F(ImportTest, UnderActuatedModelMarksTheBareJointPassive) {
   const mj::ModelPtr m = mj::load_model_from_string(
       chain_mjcf("", R"(<motor name="m0" joint="j0"/><motor name="m2" joint="j2"/>)"));
-  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "under.xml"); },
-                                             {"under-actuated", "'j1'", "link1", "under.xml", "--direct-torque",
-                                              "--actuate-every-joint"});
+  const mj::ImportedModel imported = mj::import_model(m.get(), "under.xml");
+  EXPECT_FALSE(imported.actuation.direct);
+  EXPECT_EQ(imported.model.unactuated_joints, std::vector<int>{1});
+  EXPECT_EQ(imported.model.actuated_joints, (std::vector<int>{0, 2}));
+  EXPECT_EQ(imported.actuation.passive_dofs, std::vector<int>{1});
+  EXPECT_EQ(imported.actuation.actuator_of_dof, (std::vector<int>{0, -1, 1}));
+  ASSERT_EQ(imported.notices.size(), 1u) << joined(imported.notices);
+  EXPECT_NE(imported.notices[0].find("under-actuated: joint(s) 'j1' have no actuator"), std::string::npos)
+      << imported.notices[0];
+  // a passive joint is not an unbounded one
+  EXPECT_TRUE(imported.actuation.unbounded_joints.empty() ||
+              std::find(imported.actuation.unbounded_joints.begin(), imported.actuation.unbounded_joints.end(),
+                        "j1") == imported.actuation.unbounded_joints.end());
+  EXPECT_NE(imported.actuation.summary().find("under-actuated, 1 joint(s) without an actuator"), std::string::npos);
 }
 
-// direct torques would drive the joints the model leaves without an actuator: only on request
+// direct torques drive the joints the model leaves without an actuator only on request;
+// otherwise those joints stay passive
 TEST_F(ImportTest, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
   // an acrobot: the shoulder is passive
   const mj::ModelPtr m = mj::load_model(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/acrobot.xml");
   mj::ImportOptions options = direct_torques();
-  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(m.get(), "acrobot.xml", options); },
-                                             {"under-actuated", "joint 'shoulder' of body 'upper_arm'",
-                                              "acrobot.xml", "--actuate-every-joint"});
+  const mj::ImportedModel passive = mj::import_model(m.get(), "acrobot.xml", options);
+  EXPECT_TRUE(passive.actuation.direct);
+  EXPECT_EQ(passive.actuation.passive_dofs, std::vector<int>{0});
+  EXPECT_EQ(passive.model.unactuated_joints, std::vector<int>{0});
+  EXPECT_EQ(passive.actuation.unbounded_joints, std::vector<std::string>{"elbow"});
   options.actuate_every_joint = true;
   const mj::ImportedModel imported = mj::import_model(m.get(), "acrobot.xml", options);
   EXPECT_TRUE(imported.actuation.direct);
+  EXPECT_FALSE(imported.model.under_actuated());
   EXPECT_EQ(imported.actuation.unactuated_joints, std::vector<std::string>{"shoulder"});
   // the notice says so, and direct torques have no declared bound
   ASSERT_EQ(imported.notices.size(), 1u) << joined(imported.notices);
@@ -251,7 +267,7 @@ TEST_F(ImportTest, ServosAreReplacedByJointTorquesLimitedByTheirForceRange) {
   EXPECT_EQ(direct.model.n, 3);
 }
 
-TEST_F(ImportTest, MusclesAreRefusedAndServosOnAnUnderActuatedModelNeedTheConfirmation) {
+TEST_F(ImportTest, MusclesAreRefusedAndServosOnAnUnderActuatedModelLeaveTheBareJointPassive) {
   const mj::ModelPtr muscle = mj::load_model_from_string(chain_mjcf(
       "", R"(<motor name="m0" joint="j0"/><motor name="m1" joint="j1"/>
              <muscle name="biceps" joint="j2" lengthrange="0.1 1"/>)"));
@@ -259,8 +275,7 @@ TEST_F(ImportTest, MusclesAreRefusedAndServosOnAnUnderActuatedModelNeedTheConfir
                                              {"'biceps'", "neither a motor nor a servo", "--direct-torque"});
   const mj::ModelPtr servos = mj::load_model_from_string(
       chain_mjcf("", R"(<position name="s0" joint="j0" kp="10"/><position name="s2" joint="j2" kp="10"/>)"));
-  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(servos.get(), "servos.xml"); },
-                                             {"under-actuated", "'j1'", "servos are replaced", "--actuate-every-joint"});
+  EXPECT_EQ(mj::import_model(servos.get(), "servos.xml").model.unactuated_joints, std::vector<int>{1});
   mj::ImportOptions options;
   options.actuate_every_joint = true;
   const mj::ImportedModel imported = mj::import_model(servos.get(), "servos.xml", options);

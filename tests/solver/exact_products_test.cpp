@@ -79,14 +79,17 @@ Shooting make_problem(const Model& model, const Variant& s, std::mt19937& rng) {
   return ocp;
 }
 
-// a random point: inputs of the size of the formulation's, d and ρ positive
+// a random point: inputs of the size of the formulation's, d and ρ positive, ν (the passive
+// torques' multipliers of an under-actuated ID problem) any
 VecX<double> random_point(const Shooting& ocp, std::mt19937& rng) {
-  const int n = ocp.n(), m = ocp.problem().m(), sd = ocp.stage_dim();
+  const int ni = ocp.problem().input_dim(), m = ocp.problem().m(), ne = ocp.problem().equality_dim();
+  const int sd = ocp.stage_dim();
   const double scale = ocp.formulation() == Formulation::kForwardDynamics ? 5.0 : 2.0;
   VecX<double> U(ocp.dim());
   for (int i = 0; i < ocp.N(); ++i) {
-    U.segment(i * sd, n) = random_vector(rng, n, scale);
-    U.segment(i * sd + n, 2 * m) = random_vector(rng, 2 * m, 0.5, 2.0);
+    U.segment(i * sd, ni) = random_vector(rng, ni, scale);
+    U.segment(i * sd + ni, 2 * m) = random_vector(rng, 2 * m, 0.5, 2.0);
+    U.segment(i * sd + ni + 2 * m, ne) = random_vector(rng, ne, scale);
   }
   return U;
 }
@@ -99,8 +102,14 @@ struct NamedModel {
 const std::vector<NamedModel>& models() {
   static const std::vector<NamedModel> out = [] {
     std::vector<NamedModel> v;
-    for (const std::string& path : test::shipped_model_paths()) {
-      v.push_back({std::filesystem::path(path).stem().string(), test::load_problem(path).model});
+    // the under-actuated models last: each model's seed is its index
+    for (const bool under_actuated : {false, true}) {
+      for (const std::string& path : test::shipped_model_paths()) {
+        Model model = test::load_problem(path).model;
+        if (model.under_actuated() == under_actuated) {
+          v.push_back({std::filesystem::path(path).stem().string(), std::move(model)});
+        }
+      }
     }
     return v;
   }();

@@ -1,5 +1,6 @@
 #include "idmpc/model/model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <stdexcept>
@@ -117,6 +118,14 @@ std::vector<int> subtree_sizes(const std::vector<Link>& links) {
   return out;
 }
 
+std::vector<int> joints_where(const std::vector<Link>& links, bool actuated) {
+  std::vector<int> out;
+  for (size_t i = 0; i < links.size(); ++i) {
+    if (links[i].actuated == actuated) out.push_back(static_cast<int>(i));
+  }
+  return out;
+}
+
 std::vector<int> run_starts(const std::vector<Link>& links) {
   std::vector<int> out(links.size());
   for (size_t i = 0; i < links.size(); ++i) {
@@ -143,6 +152,8 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       friction(gather_vector(links, &Link::friction)),
       friction_velocity(gather_vector(links, &Link::friction_velocity)),
       gravity(world_gravity),
+      actuated_joints(joints_where(links, true)),
+      unactuated_joints(joints_where(links, false)),
       joint_names(gather(links, &Link::joint_name)),
       name(std::move(model_name)),
       axis_index(axis_indices(links)),
@@ -165,6 +176,7 @@ Link Model::link(int i) const {
   l.q_spring = q_spring[i];
   l.friction = friction[i];
   l.friction_velocity = friction_velocity[i];
+  l.actuated = !std::binary_search(unactuated_joints.begin(), unactuated_joints.end(), i);
   l.joint_name = joint_names[i];
   return l;
 }

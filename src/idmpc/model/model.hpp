@@ -30,6 +30,7 @@ struct Link {
   double q_spring = 0;
   double friction = 0;                        ///< friction loss f ≥ 0: passive −f·tanh(v/ε)
   double friction_velocity = 0;               ///< ε > 0 of the smooth friction (if f > 0)
+  bool actuated = true;                       ///< whether an actuator drives the joint
   std::string joint_name;                     ///< for messages
 };
 
@@ -65,6 +66,10 @@ class Model {
   const VecX<double> friction;                 ///< friction loss f: passive −f·tanh(v/ε)
   const VecX<double> friction_velocity;        ///< ε of the smooth friction (joint.hpp)
   const Vec3<double> gravity;                  ///< world gravity (zero if disabled)
+  /// the joints an actuator drives and those none does (under-actuation), increasing; the
+  /// actuators' torques u (size actuated_joints.size()) reach the joints as τ = Sᵀu, S the
+  /// selection of the actuated rows
+  const std::vector<int> actuated_joints, unactuated_joints;
   const std::vector<std::string> joint_names;  ///< for messages
   const std::string name;
 
@@ -83,6 +88,9 @@ class Model {
 
   /// @brief Link i as given to the constructor (to rebuild a variant of this model).
   Link link(int i) const;
+  /// @brief Number of actuated joints, n_u ≤ n.
+  int n_actuated() const { return static_cast<int>(actuated_joints.size()); }
+  bool under_actuated() const { return !unactuated_joints.empty(); }
 };
 
 /// @brief The model whose forward dynamics integrate joint damping implicitly over a step dt:

@@ -177,12 +177,6 @@ std::string name_list(const std::vector<std::string>& names) {
   return out;
 }
 
-std::string joint_list(const mjModel* m, const std::vector<int>& dofs) {
-  std::string out;
-  for (int i : dofs) out += (out.empty() ? "" : ", ") + joint_label(m, m->dof_jntid[i]);
-  return out;
-}
-
 // the dofs some actuator drives: joint transmissions directly, the others (tendons, sites, …)
 // through their moment arms at qpos0
 std::vector<bool> actuated_dofs(const mjModel* m) {
@@ -242,9 +236,9 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
     act.torque_lower[dof] = std::max(act.torque_lower[dof], std::min(a, b));
     act.torque_upper[dof] = std::min(act.torque_upper[dof], std::max(a, b));
   };
-  // joints without an actuator: direct torques drive them only on the user's confirmation
-  auto require_confirmation = [&](const std::vector<bool>& actuated, const std::string& why) {
-    std::vector<int> bare;
+  // joints without an actuator: direct torques drive them only on the user's confirmation;
+  // without it the model is under-actuated and those joints stay passive
+  auto bare_joints = [&](const std::vector<bool>& actuated, bool confirmed) {
     for (int i = 0; i < m->nv; ++i) {
       if (actuated[i]) continue;
       // a joint an active joint equality ties to an actuated one (a mimic joint, e.g. a second
@@ -254,17 +248,12 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
         act.coupled_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]) + "' (with '" +
                                      object_name(m, mjOBJ_JOINT, m->dof_jntid[leader]));
         coupled.emplace_back(i, leader);
-        continue;
+      } else if (confirmed) {
+        act.unactuated_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
+      } else {
+        act.passive_dofs.push_back(i);
       }
-      bare.push_back(i);
     }
-    if (bare.empty()) return;
-    if (!options.actuate_every_joint) {
-      throw std::invalid_argument("model '" + source + "' is under-actuated: " + joint_list(m, bare) +
-                                  (bare.size() == 1 ? " has" : " have") + " no actuator, and " + why +
-                                  ": confirm with --actuate-every-joint (ImportOptions::actuate_every_joint)");
-    }
-    for (int i : bare) act.unactuated_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
   };
   // the file's own joint torque ranges, and what is left unbounded
   auto finish = [&] {
@@ -281,7 +270,12 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
         bound(m->jnt_dofadr[j], lo, hi);
       }
     }
+    for (int i : act.passive_dofs) {
+      act.torque_lower[i] = -kInf;
+      act.torque_upper[i] = kInf;
+    }
     for (int i = 0; i < m->nv; ++i) {
+      if (act.passive(i)) continue;
       if (std::isinf(act.torque_lower[i]) || std::isinf(act.torque_upper[i])) {
         act.unbounded_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
       }
@@ -299,7 +293,7 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
     }
   }
   if (options.direct_torque) {
-    require_confirmation(actuated_dofs(m), "--direct-torque would apply torques to every joint");
+    bare_joints(actuated_dofs(m), options.actuate_every_joint);
     return finish();
   }
 
@@ -352,24 +346,22 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
       const int dof = m->jnt_dofadr[m->actuator_trnid[2 * u]];
       if (!of_dof[dof].motor) act.replaced_servos.push_back(object_name(m, mjOBJ_ACTUATOR, u));
     }
-    require_confirmation(actuated, "its servos are replaced by joint torques, which would drive every joint");
+    bare_joints(actuated, options.actuate_every_joint);
     return finish();
   }
-  std::vector<int> bare;
-  for (int i = 0; i < m->nv; ++i) {
-    if (!actuated[i]) bare.push_back(i);
-  }
-  if (!bare.empty()) {
-    throw std::invalid_argument("model '" + source + "' is under-actuated: " + joint_list(m, bare) +
-                                (bare.size() == 1 ? " has" : " have") +
-                                " no motor actuator (expected one motor per joint, or no actuators at all, or "
-                                "--direct-torque --actuate-every-joint to drive every joint with direct torques)");
+  // motors: a joint without one is passive (a mimic joint follows its leader's motor)
+  bare_joints(actuated, false);
+  if (!act.coupled_joints.empty()) {
+    throw std::invalid_argument("model '" + source + "': joint(s) '" + act.coupled_joints.front() +
+                                "') have no motor but a joint equality ties them to a motor's joint: use "
+                                "--direct-torque to drive them with direct torques");
   }
   act.direct = false;
-  act.actuator_of_dof.resize(m->nv);
-  act.ctrl_per_torque.resize(m->nv);
+  act.actuator_of_dof.assign(m->nv, -1);
+  act.ctrl_per_torque.assign(m->nv, 0.0);
   for (int i = 0; i < m->nv; ++i) {
     const int u = of_dof[i].actuator;
+    if (u < 0) continue;
     act.actuator_of_dof[i] = u;
     act.ctrl_per_torque[i] = 1.0 / (m->actuator_gainprm[u * mjNGAIN] * m->actuator_gear[6 * u]);
   }
@@ -410,6 +402,13 @@ std::vector<std::string> actuation_notices(const mjModel* m, const Actuation& ac
   if (!act.unactuated_joints.empty()) {
     out.push_back("joint(s) " + name_list(act.unactuated_joints) +
                   " have no actuator in the model and are driven by direct torques, as confirmed");
+  }
+  if (!act.passive_dofs.empty()) {
+    std::vector<std::string> names;
+    for (int i : act.passive_dofs) names.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
+    out.push_back("under-actuated: joint(s) " + name_list(names) +
+                  " have no actuator (their torque stays zero; --actuate-every-joint with --direct-torque would drive "
+                  "them)");
   }
   return out;
 }
@@ -455,9 +454,12 @@ std::string Actuation::summary() const {
   } else if (direct) {
     out = "joint torques applied directly (qfrc_applied)";
   } else {
-    out = "one motor actuator per joint";
+    out = passive_dofs.empty() ? "one motor actuator per joint" : "one motor actuator per actuated joint";
   }
   if (!unactuated_joints.empty()) out += "; joints without an actuator driven too: " + name_list(unactuated_joints);
+  if (!passive_dofs.empty()) {
+    out += "; under-actuated, " + std::to_string(passive_dofs.size()) + " joint(s) without an actuator";
+  }
   if (unbounded_joints.empty()) {
     out += "; every joint's torque is bounded";
   } else {
@@ -496,7 +498,9 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
   }
   const Vec3<double> gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
                                                                       : vec3(m->opt.gravity);
-  ImportedModel out{Model(links, gravity, source), import_actuation(m, source, options), {}, {}};
+  Actuation actuation = import_actuation(m, source, options);
+  for (int i : actuation.passive_dofs) links[static_cast<std::size_t>(i)].actuated = false;
+  ImportedModel out{Model(links, gravity, source), std::move(actuation), {}, {}};
   out.unmodeled = unmodeled_features(m);
   out.notices = actuation_notices(m, out.actuation);
   return out;

@@ -2,6 +2,7 @@
 /// @file import.hpp
 /// @brief mjModel → Model, following formulations.md §The model exactly, plus how torques reach the plant.
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,8 @@ struct ImportOptions {
 ///   forcerange × gear (when force-limited) bounds its joint's torque. The servo's control and
 ///   activation ranges are positions or velocities, not torques, and do not bound τ.
 /// - Direct (no actuators, or ImportOptions::direct_torque): τ → qfrc_applied.
+/// - Under-actuated: joints no actuator drives (and that no confirmation lets direct torques
+///   drive) are passive: the plant applies no torque there, whatever τ holds.
 struct Actuation {
   bool direct = true;                ///< τ → qfrc_applied (actuation disabled)
   std::vector<int> actuator_of_dof;  ///< else ctrl[actuator_of_dof[i]] = τ_i · ctrl_per_torque[i]
@@ -50,6 +53,11 @@ struct Actuation {
   /// Joints no actuator of the model drives, actuated by direct torques on the user's
   /// confirmation (ImportOptions::actuate_every_joint).
   std::vector<std::string> unactuated_joints;
+  /// Dofs no actuator drives and no direct torque may drive (without
+  /// ImportOptions::actuate_every_joint): the model is under-actuated, these joints are passive
+  /// (Link::actuated false; their torque limits ±infinity), increasing.
+  std::vector<int> passive_dofs;
+  bool passive(int dof) const { return std::binary_search(passive_dofs.begin(), passive_dofs.end(), dof); }
   /// Joints without an actuator that an active joint equality ties to an actuated joint (mimic
   /// joints), driven by direct torques within that joint's range: "name' (with 'leader".
   std::vector<std::string> coupled_joints;
@@ -69,8 +77,9 @@ struct ImportedModel {
 /// @brief Builds the controller's Model from a MuJoCo model. Throws std::invalid_argument
 /// naming the element for anything unsupported: ball/free joints; actuators neither motors nor
 /// servos (muscles, user gains), on a tendon, site or body, or two on one joint (unless
-/// direct_torque); under-actuation (joints without an actuator) unless the torques are direct
-/// and actuate_every_joint confirms it. `source` names the file in messages.
+/// direct_torque). Joints without an actuator are passive (an under-actuated model) unless the
+/// torques are direct and actuate_every_joint lets them drive every joint. `source` names the
+/// file in messages.
 ImportedModel import_model(const mjModel* m, const std::string& source,
                            const ImportOptions& options = {});
 

@@ -47,11 +47,14 @@ void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
 }
 
 void Plant::apply(const VecX<double>& tau) {
+  // a passive joint gets nothing, whatever τ holds there
   if (actuation_.direct) {
     mju_copy(d_->qfrc_applied, tau.data(), m_->nv);
+    for (int i : actuation_.passive_dofs) d_->qfrc_applied[i] = 0;
   } else {
     for (int i = 0; i < m_->nv; ++i) {
-      d_->ctrl[actuation_.actuator_of_dof[i]] = tau[i] * actuation_.ctrl_per_torque[i];
+      const int u = actuation_.actuator_of_dof[i];
+      if (u >= 0) d_->ctrl[u] = tau[i] * actuation_.ctrl_per_torque[i];
     }
   }
 }

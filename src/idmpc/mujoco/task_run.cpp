@@ -63,7 +63,6 @@ TaskRun::TaskRun(const Task& task)
       model_(std::make_shared<const Model>(imported_.model)),
       resolved_(resolve(task, model_->n)) {
   const mjModel* m = loaded_.model.get();
-  const int n = model_->n;
   if (resolved_.q0.size() == 0) resolved_.q0 = keyframe_qpos(m, task.q0_rule, task.model);
   if (task.qref_start) resolved_.controller.q_ref = resolved_.q0;
   set_up_references();
@@ -72,7 +71,12 @@ TaskRun::TaskRun(const Task& task)
   // and the clamp of every torque the plant receives
   lower_ = imported_.actuation.torque_lower.cwiseMax(-resolved_.torque_limit);
   upper_ = imported_.actuation.torque_upper.cwiseMin(resolved_.torque_limit);
-  for (int j = 0; j < n; ++j) {
+  for (int j : model_->unactuated_joints) {
+    // a passive joint: no actuator, no torque to bound (the controller's is zero there)
+    lower_[j] = -std::numeric_limits<double>::infinity();
+    upper_[j] = std::numeric_limits<double>::infinity();
+  }
+  for (int j : model_->actuated_joints) {
     if (!std::isfinite(lower_[j]) && !std::isfinite(upper_[j])) unbounded_.push_back(model_->joint_names[j]);
   }
 

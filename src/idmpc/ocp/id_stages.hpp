@@ -19,6 +19,7 @@ namespace idmpc {
 
 template <DerivativeMode M, bool Lanes> class IdStages final : public StageModel {
  public:
+  /// @param m multipliers per stage (those of the torque limits and of the passive torques)
   IdStages(const Model& model, int N, int m);
 
   std::unique_ptr<StageModel> clone() const override { return std::make_unique<IdStages>(*this); }

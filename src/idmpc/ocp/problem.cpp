@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "idmpc/ocp/actuated_input_stages.hpp"
 #include "idmpc/ocp/fd_stages.hpp"
 #include "idmpc/ocp/id_stages.hpp"
 
@@ -29,13 +30,22 @@ int OcpProblem::checked_n(const std::shared_ptr<const Model>& model) {
 
 OcpProblem::OcpProblem(std::shared_ptr<const Model> model, Formulation formulation, DerivativeMode mode,
                        QuadraticCost cost, int N, const TorqueLimits& limits)
-    : terms_(std::move(model), std::move(cost), limits, N, mode == DerivativeMode::kMatrix),
+    : terms_(std::move(model), std::move(cost), limits, N, mode == DerivativeMode::kMatrix,
+             formulation == Formulation::kInverseDynamics),
       formulation_(formulation),
       mode_(mode),
       N_(N) {
   if (N < 1) throw std::invalid_argument("horizon steps N must be at least 1, got " + std::to_string(N));
-  if (formulation_ == Formulation::kForwardDynamics && (terms_.cost().weights().R.array() <= 0).any()) {
-    throw std::invalid_argument("the forward-dynamics problem needs R > 0 on every joint");
+  const Model& m = terms_.model();
+  if (m.n_actuated() == 0) {
+    throw std::invalid_argument("model '" + m.name + "' has no actuated joint: there is nothing to control");
+  }
+  if (formulation_ == Formulation::kForwardDynamics) {
+    for (int j : m.actuated_joints) {
+      if (!(terms_.cost().weights().R[j] > 0)) {
+        throw std::invalid_argument("the forward-dynamics problem needs R > 0 on every actuated joint");
+      }
+    }
   }
   stages_ = make_stages();
 }
@@ -71,14 +81,20 @@ std::unique_ptr<StageModel> OcpProblem::make_stages() const {
   using D = DerivativeMode;
   const Model& model = terms_.model();
   if (formulation_ == Formulation::kForwardDynamics) {
+    std::unique_ptr<StageModel> fd;
     if (mode_ == D::kMatrix) {
-      if (lanes_) return std::make_unique<FdStages<D::kMatrix, true>>(model, N_);
-      return std::make_unique<FdStages<D::kMatrix, false>>(model, N_);
+      fd = lanes_ ? std::unique_ptr<StageModel>(std::make_unique<FdStages<D::kMatrix, true>>(model, N_))
+                  : std::make_unique<FdStages<D::kMatrix, false>>(model, N_);
+    } else {
+      fd = lanes_ ? std::unique_ptr<StageModel>(std::make_unique<FdStages<D::kAdjoint, true>>(model, N_))
+                  : std::make_unique<FdStages<D::kAdjoint, false>>(model, N_);
     }
-    if (lanes_) return std::make_unique<FdStages<D::kAdjoint, true>>(model, N_);
-    return std::make_unique<FdStages<D::kAdjoint, false>>(model, N_);
+    // under-actuated: the actuators' torques are the input
+    if (model.under_actuated()) return std::make_unique<ActuatedInputStages>(std::move(fd), model, terms_.m());
+    return fd;
   }
-  const int m = terms_.m();
+  // ID: the multipliers ρ of the limits and ν of the passive torques
+  const int m = terms_.m() + terms_.n_e();
   if (mode_ == D::kMatrix) {
     if (lanes_) return std::make_unique<IdStages<D::kMatrix, true>>(model, N_, m);
     return std::make_unique<IdStages<D::kMatrix, false>>(model, N_, m);

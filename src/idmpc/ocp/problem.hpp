@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/ocp/cost.hpp"
@@ -104,9 +105,21 @@ class OcpProblem {
   /// @brief Stage i's references at t0 + i·Δτ (what moves; nothing when nothing does).
   void set_stage_times(double t0, double dtau) { terms_.set_stage_times(t0, dtau); }
 
-  /// @brief Unknowns of one stage: its input (n), dummy inputs d (m), multipliers ρ (m), in
-  /// this order; the stage's block F_i of the residual has the same layout.
-  int stage_dim() const { return n() + 2 * m(); }
+  /// @brief The stage's input: FD the actuators' torques (n_u = Model::n_actuated(), the
+  /// passive joints' torque zero), ID the accelerations (n).
+  int input_dim() const {
+    return formulation_ == Formulation::kForwardDynamics ? model().n_actuated() : n();
+  }
+  /// @brief ID's equality constraints on the passive joints' torques per stage (n − n_u; FD: 0).
+  int equality_dim() const { return terms_.n_e(); }
+  /// @brief Unknowns of one stage: its input (input_dim), dummy inputs d (m), multipliers ρ (m)
+  /// of the torque limits, multipliers ν (equality_dim) of the passive torques, in this order;
+  /// the stage's block F_i of the residual has the same layout.
+  int stage_dim() const { return input_dim() + 2 * m() + equality_dim(); }
+  /// @brief Where d starts in a stage's block (= input_dim).
+  int dummy_offset() const { return input_dim(); }
+  /// @brief The joints a FD input's entries drive, increasing (Model::actuated_joints).
+  const std::vector<int>& input_joints() const { return model().actuated_joints; }
 
   /// @brief Stages in SIMD lanes wherever they are independent (on by default): ID's dynamics and
   /// products after the rollout (stages_in_lanes); FD matrix's stage derivatives after the rollout
@@ -144,8 +157,10 @@ class OcpProblem {
   void stages_at_costates(Evaluation ev, StageTrajectories& x) { stages_->at_costates(terms_, ev, x); }
 
   /// @brief Derivatives of stage i's Hamiltonian
-  /// H_i = L(x_i, ·) − r_dᵀd_i + ρ_iᵀ(s∘c(u_i, d_i)) + λ_{i+1}ᵀv_i + γ_{i+1}ᵀa_i (torque_limits.hpp) at its
-  /// linearization of evaluation `ev`, with the dummy inputs d and multipliers ρ (size m):
+  /// H_i = L(x_i, ·) − r_dᵀd_i + ρ_iᵀ(s∘c(u_i, d_i)) + s_E ν_iᵀu_E,i + λ_{i+1}ᵀv_i + γ_{i+1}ᵀa_i
+  /// (torque_limits.hpp, stage_terms.hpp) at its linearization of evaluation `ev`, with the
+  /// dummy inputs d (size m) and multipliers (ρ, ν) (size m + equality_dim); `u` the joint
+  /// torques (size n, FD: zero on the passive joints):
   /// F = (∂H/∂input, ∂H/∂d, ∂H/∂ρ) (size stage_dim), the stage's block F_i of the optimality
   /// residual; with `state` also hq = ∂H/∂q and hv = ∂H/∂v, so that the Euler costates are
   /// λ_i = λ_{i+1} + Δτ hq, γ_i = γ_{i+1} + Δτ hv (formulations.md §Rollout, costates and residual). Without `state` (stage 0), hq

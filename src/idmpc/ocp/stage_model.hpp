@@ -37,8 +37,8 @@ struct StageTrajectories {
   const MatX<double>& q;    ///< n × (N+1) states
   const MatX<double>& v;
   MatX<double>& a;          ///< n × N accelerations: FD's outputs, ID's inputs
-  MatX<double>& u;          ///< n × N torques: FD's inputs, ID's outputs
-  const MatX<double>& rho;  ///< m × N multipliers
+  MatX<double>& u;          ///< n × N joint torques: FD's inputs (zero on passive joints), ID's outputs
+  const MatX<double>& rho;  ///< (m + n_e) × N multipliers: ρ of the limits, ν of the passive torques
   const MatX<double>* gmm;  ///< n × (N+1) given costates γ (multiple shooting), or null
 };
 

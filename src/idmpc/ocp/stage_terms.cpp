@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -15,6 +16,24 @@ namespace {
 const Model& checked(const std::shared_ptr<const Model>& model) {
   if (!model) throw std::invalid_argument("optimal control problem: expected a model, got none");
   return *model;
+}
+
+// the limits with the passive joints unbounded: no actuator, no torque to limit
+TorqueLimits actuated_limits(const Model& model, TorqueLimits limits) {
+  if (limits.lower.size() != model.n || limits.upper.size() != model.n) return limits;  // TorqueBounds says why
+  for (int j : model.unactuated_joints) {
+    limits.lower[j] = -std::numeric_limits<double>::infinity();
+    limits.upper[j] = std::numeric_limits<double>::infinity();
+  }
+  return limits;
+}
+
+// the mean R of the actuated joints, or 1
+double passive_scale_of(const Model& model, const VecX<double>& R) {
+  if (model.n_actuated() == 0 || R.size() != model.n) return 1;
+  double sum = 0;
+  for (int j : model.actuated_joints) sum += R[j];
+  return sum > 0 ? sum / model.n_actuated() : 1;
 }
 
 std::string frame_label(const Frame& frame) { return "frame target '" + frame.name + "'"; }
@@ -36,10 +55,13 @@ void check_pose(const Frame& frame, const Vec3<double>& position, const Mat3<dou
 }  // namespace
 
 StageTerms::StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits, int N,
-                       bool frame_jacobian_matrix)
+                       bool frame_jacobian_matrix, bool passive_constraints)
     : model_(std::move(model)),
       cost_(std::move(cost)),
-      bounds_(limits, cost_.weights().R, cost_.n()),
+      bounds_(actuated_limits(checked(model_), limits), cost_.weights().R, cost_.n()),
+      passive_constraints_(passive_constraints),
+      passive_(model_->unactuated_joints),
+      passive_scale_(passive_scale_of(*model_, cost_.weights().R)),
       N_(N),
       frame_jacobian_matrix_(frame_jacobian_matrix),
       d_hat_(Vec::Zero(checked(model_).n)),
@@ -58,6 +80,9 @@ StageTerms::StageTerms(const StageTerms& o)
     : model_(o.model_),
       cost_(o.cost_),
       bounds_(o.bounds_),
+      passive_constraints_(o.passive_constraints_),
+      passive_(o.passive_),
+      passive_scale_(o.passive_scale_),
       N_(o.N_),
       frame_jacobian_matrix_(o.frame_jacobian_matrix_),
       d_hat_(o.d_hat_),

@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include "idmpc/dynamics/kinematics.hpp"
 #include "idmpc/model/data.hpp"
@@ -43,8 +44,15 @@ class StageTerms {
   /// u_ref = ID(q_ref, 0, 0). `mode` says how the frame cost's gradient is formed (matrix: the
   /// Jacobian, then its product; adjoint: the product in one sweep). Throws
   /// std::invalid_argument on a null model, sizes that differ from the model's or bad limits.
+  ///
+  /// Passive joints (Model::unactuated_joints) have no torque limit (any given there is
+  /// dropped). With `passive_constraints` (the ID problem, whose torques are outputs) each
+  /// stage has the equality constraint s_E u_E = 0 on their torques u_E, with a multiplier ν
+  /// per passive joint after ρ (formulations.md §Under-actuation): H gains s_E νᵀu_E, so
+  /// w = ∂H/∂u gains s_E ν on those rows and ∂H/∂ν = s_E u_E. s_E is the mean R of the
+  /// actuated joints (1 if that is 0): the constraint in the units of the torque gradient.
   StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits, int N,
-             bool frame_jacobian_matrix);
+             bool frame_jacobian_matrix, bool passive_constraints = false);
   StageTerms(const StageTerms& o);
   StageTerms& operator=(const StageTerms& o);
   StageTerms(StageTerms&&) noexcept = default;
@@ -74,6 +82,10 @@ class StageTerms {
   const std::shared_ptr<const Model>& model_ptr() const { return model_; }
   int n() const { return model_->n; }
   int m() const { return bounds_.m(); }
+  /// @brief Equality constraints on the passive joints' torques per stage (0 without
+  /// passive_constraints or passive joints); their multipliers ν follow ρ (size m + n_e).
+  int n_e() const { return passive_constraints_ ? model_->n - model_->n_actuated() : 0; }
+  double passive_scale() const { return passive_scale_; }
   const QuadraticCost& cost() const { return cost_; }
   const TorqueBounds& bounds() const { return bounds_; }
   TorqueBounds& bounds() { return bounds_; }
@@ -115,8 +127,9 @@ class StageTerms {
   /// @brief Stage i's frame target position (with a frame target).
   Eigen::Ref<const Vec3<double>> frame_position_ref(int i) const { return p_ref_.col(i); }
 
-  /// @brief w = ∂(L + ρᵀ(s∘c))/∂u = R(u − u_ref,i) + 2s∘ρ∘(u − ū) on the bounded joints of stage
-  /// i (u, w size n; ρ size m).
+  /// @brief w = ∂(L + ρᵀ(s∘c) + s_E νᵀu_E)/∂u = R(u − u_ref,i) + 2s∘ρ∘(u − ū) on the bounded
+  /// joints of stage i, + s_E ν on the constrained passive ones (u, w size n; ρ size m + n_e,
+  /// the torque limits' multipliers then ν).
   void torque_gradient(int i, In u, In rho, Out w) const { torque_gradient_of<double>(i, u, rho, w); }
   void torque_gradient(int i, DualIn u, DualIn rho, DualOut w) const { torque_gradient_of<Dual>(i, u, rho, w); }
 
@@ -134,6 +147,7 @@ class StageTerms {
       const int j = bounds_.joints()[static_cast<size_t>(k)];
       w[j] += (2.0 * bounds_.scale()[k]) * rho[k] * (u[j] - bounds_.middle()[k]);
     }
+    for (int k = 0; k < n_e(); ++k) w[passive_[static_cast<size_t>(k)]] += passive_scale_ * rho[m() + k];
   }
 
   /// @brief The state part of stage i's cost gradient, ∂L/∂q and ∂L/∂v (i = N: ∂φ/∂q, ∂φ/∂v,
@@ -160,8 +174,8 @@ class StageTerms {
   /// (cost_scratch()).
   double stage_cost_at(double t, In q, In v, In u, CostScratch& scratch) const;
 
-  /// @brief The rest of stage i's block F_i once its first n rows hold ∂H/∂input: ∂H/∂d =
-  /// −r_d + 2s∘ρ∘d and ∂H/∂ρ = s∘c; with `state` also hq = ∂L/∂q + gq and hv = ∂L/∂v + λ_{i+1}
+  /// @brief The rest of stage i's block F_i once its first rows hold ∂H/∂input: its last 2m + n_e
+  /// rows, ∂H/∂d = −r_d + 2s∘ρ∘d, ∂H/∂ρ = s∘c and ∂H/∂ν = s_E u_E; with `state` also hq = ∂L/∂q + gq and hv = ∂L/∂v + λ_{i+1}
   /// + gv (the Euler step q_{i+1} = q_i + Δτ v_i), for the dynamics' parts gq, gv of ∂H/∂q, ∂H/∂v.
   /// The frame cost's part is computed in the caller's `frame` workspace.
   void close_stage(int i, In q, In v, In u, In d, In rho, In lmd_next, In gq, In gv, Out hq, Out hv, Out F,
@@ -180,6 +194,7 @@ class StageTerms {
   template <typename S> void torque_gradient_of(int i, RefIn<S> u, RefIn<S> rho, RefOut<S> w) const {
     w = cost_.weights().R.cwiseProduct(u - u_ref_.col(i));
     bounds_.add_torque_gradient(u, rho, w);
+    for (int k = 0; k < n_e(); ++k) w[passive_[static_cast<size_t>(k)]] += passive_scale_ * rho[m() + k];
   }
   template <typename S>
   void state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q, RefOut<S> L_v, FrameScratch<S>& frame) const;
@@ -187,8 +202,10 @@ class StageTerms {
   void close_stage_of(int i, RefIn<S> q, RefIn<S> v, RefIn<S> u, RefIn<S> d, RefIn<S> rho, RefIn<S> lmd_next,
                       RefIn<S> gq, RefIn<S> gv, RefOut<S> hq, RefOut<S> hv, RefOut<S> F, bool state,
                       FrameScratch<S>& frame) const {
-    const int n = this->n(), m = this->m();
-    if (m > 0) bounds_.dummy_gradients(u, d, rho, F.segment(n, m), F.segment(n + m, m));
+    const int m = this->m(), ne = n_e();
+    const Eigen::Index off = F.size() - 2 * m - ne;  // after the input's rows
+    if (m > 0) bounds_.dummy_gradients(u, d, rho, F.segment(off, m), F.segment(off + m, m));
+    for (int k = 0; k < ne; ++k) F[off + 2 * m + k] = passive_scale_ * u[passive_[static_cast<size_t>(k)]];
     if (!state) return;
     state_gradient(i, q, v, hq, hv, frame);
     hq += gq;
@@ -206,6 +223,9 @@ class StageTerms {
   std::shared_ptr<const Model> model_;
   QuadraticCost cost_;
   TorqueBounds bounds_;
+  bool passive_constraints_;
+  std::vector<int> passive_;  ///< the model's passive joints
+  double passive_scale_ = 1;  ///< s_E
   int N_;
   bool frame_jacobian_matrix_;
   Vec d_hat_;      ///< disturbance estimate

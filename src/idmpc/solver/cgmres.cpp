@@ -118,14 +118,15 @@ void Cgmres::set_trajectory(const ShootingTrajectory& X) {
 double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
                           const Eigen::Ref<const VecX<double>>& v) {
   IDMPC_CHECK_ARGUMENT(q.size() == ocp_.n() && v.size() == ocp_.n(), "Cgmres::initialize: q and v must have size n");
-  const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
+  const int ni = ocp_.problem().dummy_offset(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
+  const int ne = ocp_.problem().equality_dim();
   const double T = horizon_.length(t);
   const bool full = settings_.init_full_horizon && T > 0;
   ocp_.set_time(t);
-  // one stage's unknowns (input, d, ρ): the input starts at zero, ρ = 0 leaves it unconstrained
+  // one stage's unknowns (input, d, ρ, ν): the input starts at zero, ρ = 0 leaves it unconstrained
   VecX<double> z = VecX<double>::Zero(sd);
   if (m > 0) {
-    z.segment(n, m) = ocp_.problem().torque_bounds().half_range();
+    z.segment(ni, m) = ocp_.problem().torque_bounds().half_range();
     ocp_.problem().set_dummy_weight_factor(1.0);
   }
   // the full-horizon start grows the horizon from zero
@@ -156,15 +157,16 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
     z.head(size) = x;
     return norm;
   };
-  // the unconstrained input first; with torque limits, then (d, ρ) consistent with its torque
-  // and the whole stage solved (the dummy weight raised for the full-horizon start)
-  double norm = newton(n);
+  // the unconstrained input first; with torque limits, then (d, ρ) consistent with its torque;
+  // with limits or passive torques, the whole stage solved (the dummy weight raised for the
+  // full-horizon start)
+  double norm = newton(ni);
   if (m > 0) {
     if (full) ocp_.problem().set_dummy_weight_factor(std::pow(10.0, kInitDummyWeightDecades));
     F_of(z);
-    ocp_.problem().torque_bounds().consistent_dummy(ocp_.first_torque(), z.segment(n, m), z.segment(n + m, m));
-    norm = newton(sd);
+    ocp_.problem().torque_bounds().consistent_dummy(ocp_.first_torque(), z.segment(ni, m), z.segment(ni + m, m));
   }
+  if (m + ne > 0) norm = newton(sd);
   for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd, sd) = z;
   if (full) norm = solve_full_horizon(q, v, T);
   Udot_.setZero();
@@ -182,7 +184,7 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
 // Newton–GMRES at each level, (d, ρ) kept positive
 double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
                                   const Eigen::Ref<const VecX<double>>& v, double T) {
-  const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim(), dim = ocp_.dim();
+  const int ni = ocp_.problem().dummy_offset(), m = ocp_.problem().m(), sd = ocp_.stage_dim(), dim = ocp_.dim();
   const double h = settings_.h, tolerance = settings_.init_tolerance * std::sqrt(static_cast<double>(dim));
   Gmres gmres(dim, std::min(dim, kInitKrylov));
   VecX<double> F(dim), Fw(dim), Uw(dim), dU(dim);
@@ -215,7 +217,7 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
       // fraction to the boundary d, ρ > 0, then backtracking on ‖F‖
       double step = 1;
       for (int i = 0; i < ocp_.N(); ++i) {
-        for (int j = i * sd + n; j < (i + 1) * sd; ++j) {
+        for (int j = i * sd + ni; j < i * sd + ni + 2 * m; ++j) {
           if (dU[j] < 0) step = std::min(step, -kFractionToBoundary * U_[j] / dU[j]);
         }
       }
@@ -250,7 +252,7 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
   // then a decade less of dummy weight at a time; ρ = r_d / 2sd follows
   for (int left = m > 0 ? kInitDummyWeightDecades - 1 : -1; left >= 0; --left) {
     ocp_.problem().set_dummy_weight_factor(std::pow(10.0, left));
-    for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd + n + m, m) *= 0.1;
+    for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd + ni + m, m) *= 0.1;
     newton(T);
   }
   // the levels above may stop at 1e-8 of their start; the problem itself is solved to the
@@ -264,11 +266,11 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
 
 // (d, ρ) of every stage set consistent with the stage torques of the last evaluation
 void Cgmres::synchronize_dummy() {
-  const int n = ocp_.n(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
+  const int ni = ocp_.problem().dummy_offset(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
   for (int i = 0; i < ocp_.N(); ++i) {
-    ocp_.problem().torque_bounds().consistent_dummy(ocp_.torques().col(i), U_.segment(i * sd + n, m),
-                                                    U_.segment(i * sd + n + m, m));
-    Udot_.segment(i * sd + n, 2 * m).setZero();
+    ocp_.problem().torque_bounds().consistent_dummy(ocp_.torques().col(i), U_.segment(i * sd + ni, m),
+                                                    U_.segment(i * sd + ni + m, m));
+    Udot_.segment(i * sd + ni, 2 * m).setZero();
   }
 }
 

@@ -22,14 +22,15 @@ class CgmresMpc final : public MpcSolver {
   double dt() const override { return cgmres_.settings().dt; }
   double initialize(double t, In q, In v) override {
     const double r = cgmres_.initialize(t, q, v);
-    u0_ = cgmres_.solution().head(shooting_.n());
+    set_first_input();
     return r;
   }
   bool update(double t, In q, In v) override {
     if (!cgmres_.update(t, q, v)) return false;
-    u0_ = cgmres_.solution().head(shooting_.n());
+    set_first_input();
     return true;
   }
+  /// @brief Stage 0's input as joint values: FD the joint torques, ID the accelerations (size n).
   const Vec& first_input() const override { return u0_; }
   const std::string& failure() const override { return cgmres_.failure(); }
   double residual_norm() const override { return cgmres_.residual_norm(); }
@@ -45,6 +46,18 @@ class CgmresMpc final : public MpcSolver {
   const Cgmres& cgmres() const { return cgmres_; }
 
  private:
+  // stage 0's input, as joint values (FD under-actuated: the passive joints' torques zero)
+  void set_first_input() {
+    const OcpProblem& p = shooting_.problem();
+    const int ni = p.input_dim();
+    if (ni == shooting_.n()) {
+      u0_ = cgmres_.solution().head(ni);
+      return;
+    }
+    u0_.setZero();
+    for (int k = 0; k < ni; ++k) u0_[p.input_joints()[static_cast<std::size_t>(k)]] = cgmres_.solution()[k];
+  }
+
   Shooting shooting_;
   Cgmres cgmres_;
   Vec u0_;

@@ -279,6 +279,8 @@ void Controller::torque_rule(In q, In v, In a0_hat, double dt) {
     q_pred_ = q + dt * v;
     v_pred_ = v + dt * a0_hat;
     tau_cmd_ = rnea(*plant_model_, data_, q_pred_, v_pred_, U0) - problem().disturbance();
+    // a passive joint has no actuator: its torque is the horizon's constraint, not a command
+    for (int j : problem().model().unactuated_joints) tau_cmd_[j] = 0;
   }
   // the plant never receives a torque its actuator cannot give (a non-finite command is a
   // divergence, reported by update)

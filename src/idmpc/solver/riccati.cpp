@@ -60,6 +60,11 @@ void RiccatiSettings::validate() const {
 RiccatiSolver::RiccatiSolver(OcpProblem problem, double Tf, double dt, const RiccatiSettings& settings)
     : problem_(std::move(problem)), settings_(settings), Tf_(Tf), dt_(dt), hold_(problem_.model(), DataParts::rnea()) {
   settings_.validate();
+  if (problem_.model().under_actuated()) {
+    throw std::invalid_argument("the Riccati solver does not take under-actuated models yet (joint '" +
+                                problem_.model().joint_names[static_cast<size_t>(problem_.model().unactuated_joints[0])] +
+                                "' has no actuator): use the C/GMRES solver");
+  }
   if (!(Tf > 0) || !std::isfinite(Tf)) throw std::invalid_argument("horizon length Tf must be positive, got " + text(Tf));
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("sampling period dt must be positive, got " + text(dt));
   const int n = this->n(), N = this->N(), nx = 2 * n;

@@ -45,20 +45,26 @@ Shooting::Shooting(OcpProblem problem) : problem_(std::move(problem)) {
   a_ = MatX<double>::Zero(n, N);
   u_ = MatX<double>::Zero(n, N);
   d_ = MatX<double>::Zero(problem_.m(), N);
-  rho_ = MatX<double>::Zero(problem_.m(), N);
+  rho_ = MatX<double>::Zero(problem_.m() + problem_.equality_dim(), N);
   for (Vec* x : {&hq_, &hv_, &phi_q_, &phi_v_}) *x = Vec::Zero(n);
   if (problem_.dual_reserved()) enable_exact_products();
 }
 
 template <typename S> void Shooting::unpack(Sweep<S>& x, const Eigen::Ref<const VecX<S>>& U, int stages) const {
-  const int n = problem_.n(), m = problem_.m(), sd = problem_.stage_dim();
+  const int n = problem_.n(), ni = problem_.input_dim(), m = problem_.m(), ne = problem_.equality_dim();
+  const int sd = problem_.stage_dim();
   MatX<S>& input = problem_.formulation() == Formulation::kForwardDynamics ? x.u : x.a;
+  const std::vector<int>& joints = problem_.input_joints();
   for (int i = 0; i < stages; ++i) {
-    input.col(i) = U.segment(i * sd, n);
-    if (m > 0) {
-      x.d.col(i) = U.segment(i * sd + n, m);
-      x.rho.col(i) = U.segment(i * sd + n + m, m);
+    if (ni == n) {
+      input.col(i) = U.segment(i * sd, n);
+    } else {
+      // FD under-actuated: the actuators' torques at their joints, the passive ones zero
+      input.col(i).setZero();
+      for (int k = 0; k < ni; ++k) input(joints[static_cast<std::size_t>(k)], i) = U[i * sd + k];
     }
+    if (m > 0) x.d.col(i) = U.segment(i * sd + ni, m);
+    if (m + ne > 0) x.rho.col(i) = U.segment(i * sd + ni + m, m + ne);
   }
 }
 
@@ -69,7 +75,8 @@ void Shooting::enable_exact_products() {
   DualBuffers& b = dual_;
   for (MatX<Dual>* x : {&b.q, &b.v, &b.lmd, &b.gmm}) *x = MatX<Dual>::Zero(n, N + 1);
   for (MatX<Dual>* x : {&b.a, &b.u}) *x = MatX<Dual>::Zero(n, N);
-  for (MatX<Dual>* x : {&b.d, &b.rho}) *x = MatX<Dual>::Zero(m, N);
+  b.d = MatX<Dual>::Zero(m, N);
+  b.rho = MatX<Dual>::Zero(m + problem_.equality_dim(), N);
   for (VecX<Dual>* x : {&b.hq, &b.hv, &b.q0, &b.v0}) *x = VecX<Dual>::Zero(n);
   for (VecX<Dual>* x : {&b.U, &b.F}) *x = VecX<Dual>::Zero(dim());
   dx_.resize(n, N);

@@ -12,7 +12,9 @@
 /// exactly those defects, so F_U there is a function of U alone and GMRES still runs on U.
 ///
 /// With torque limits (formulations.md §Torque limits) each stage's block of U is (input, dummy inputs d, multipliers
-/// ρ), OcpProblem::stage_dim() long. The problem supplies the stage kernels; only the chaining of
+/// ρ), and on an under-actuated model ID's adds the multipliers ν of the passive torques
+/// (§Under-actuation): OcpProblem::stage_dim() long. FD's input on such a model is the actuators'
+/// torques, scattered to the joints (the passive ones zero). The problem supplies the stage kernels; only the chaining of
 /// stages lives here.
 
 #include <memory>
@@ -67,7 +69,8 @@ class Shooting {
 
   int n() const { return problem_.n(); }
   int N() const { return problem_.N(); }
-  /// @brief Unknowns of one stage (n + 2m: input, dummy inputs, multipliers) and of U (N of them).
+  /// @brief Unknowns of one stage (input, dummy inputs, multipliers: OcpProblem::stage_dim) and of
+  /// U (N of them).
   int stage_dim() const { return problem_.stage_dim(); }
   int dim() const { return problem_.N() * problem_.stage_dim(); }
   OcpProblem& problem() { return problem_; }
@@ -177,7 +180,7 @@ class Shooting {
   OcpTimes times_;
   ShootingTrajectory x_;     ///< states and costates, n × (N+1)
   MatX<double> a_, u_;       ///< n × N accelerations and torques
-  MatX<double> d_, rho_;     ///< m × N dummy inputs and multipliers
+  MatX<double> d_, rho_;     ///< m × N dummy inputs, (m + n_e) × N multipliers (ρ, ν)
   Vec hq_, hv_, phi_q_, phi_v_;  ///< ∂H/∂q, ∂H/∂v; terminal gradient
   DualBuffers dual_;             ///< enable_exact_products
   ShootingTrajectory dx_;        ///< trajectory_tangent
