@@ -92,7 +92,7 @@ class Gmres {
     if (kmax < 1) throw std::invalid_argument("kmax must be at least 1, got " + std::to_string(kmax));
     if (kmax > dim) {
       throw std::invalid_argument("kmax must not exceed the GMRES dimension " + std::to_string(dim) +
-                                  " (n·N, the number of unknowns), got " + std::to_string(kmax));
+                                  " (N times the unknowns per stage), got " + std::to_string(kmax));
     }
     const long long entries = static_cast<long long>(dim) * (static_cast<long long>(kmax) + 1);
     if (entries > kMaxBasisEntries) {
