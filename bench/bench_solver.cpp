@@ -22,6 +22,10 @@
 // BM_Update/<controller>_exact/…: with exact products (formulations.md §Exact products), N = 25, kmax = 10, n ≤ 16;
 // BM_Product/<controller>_exact/n:<n>/N:25 times one exact product with its residual;
 // BM_StageVectorOps/n:<n> times the vector work of one ID stage without its dynamics calls.
+// BM_UnderActuated/<fd|id>/cartpole/kmax:<kmax>: one C/GMRES update (adjoint, stages in lanes)
+//   on the cart-pole swing-up of mjcf/cartpole_swingup.json (formulations.md §Under-actuation:
+//   FD's input is the cart's force, ID's the accelerations with the hinge's torque constrained),
+//   replayed on the states of its own 0.3 s closed loop as above.
 // BM_Riccati/<fd|id>/n:<n>/N:<N>: one update of the Riccati solver (one real-time Gauss–Newton
 //   iteration: docs/solvers.md), replayed on the states of its own closed-loop swing-up as above,
 //   on Table 3's sizes and the horizon scaling (n ∈ {4,16}, N ∈ {10 … 100}).
@@ -37,8 +41,10 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "idmpc/experiment/data_dir.hpp"
 #include "idmpc/experiment/task.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
+#include "idmpc/mujoco/task_run.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "idmpc/solver/controller.hpp"
 #include "idmpc/solver/riccati.hpp"
@@ -363,6 +369,65 @@ RiccatiFixture& riccati_fixture(Formulation f, int n, int N) {
   return fx;
 }
 
+// the cart-pole swing-up under one formulation and kmax: its recorded closed loop and the solver
+// replaying it from right after its start
+struct UnderActuatedFixture {
+  std::pair<int, int> key{-1, -1};
+  std::unique_ptr<mj::TaskRun> run;
+  std::unique_ptr<Cgmres> start;
+  std::optional<Cgmres> solver;
+  std::vector<double> t;
+  std::vector<VecX<double>> q, v;
+  size_t next = 0;
+};
+
+void BM_UnderActuated(benchmark::State& state, Formulation formulation, int kmax) {
+  static std::unique_ptr<UnderActuatedFixture> current;  // one case at a time: cases run in order
+  const std::pair<int, int> key{static_cast<int>(formulation), kmax};
+  if (!current || current->key != key) {
+    current.reset();
+    current = std::make_unique<UnderActuatedFixture>();
+    UnderActuatedFixture& f = *current;
+    f.key = key;
+    Task task = load_task(shipped_mjcf_path("cartpole_swingup.json"));
+    task.formulation = to_string(formulation);
+    task.kmax = kmax;
+    task.duration = kRecordSeconds;
+    f.run = std::make_unique<mj::TaskRun>(task);
+    mj::ClosedLoopSettings loop = f.run->loop_settings();
+    loop.phase_timing = false;
+    const mj::RunResult result = f.run->run(loop, [&](const mj::StepRecord& r) {
+      f.t.push_back(r.t);
+      f.q.push_back(r.q);
+      f.v.push_back(r.v);
+    });
+    f.t.resize(result.update_ms.size());
+    f.q.resize(result.update_ms.size());
+    f.v.resize(result.update_ms.size());
+    f.run->controller().initialize(f.run->q0(), VecX<double>::Zero(f.run->n()));
+    f.start = std::make_unique<Cgmres>(f.run->controller().cgmres());
+    f.solver.emplace(*f.start);
+  }
+  UnderActuatedFixture& f = *current;
+  if (f.t.empty()) {
+    state.SkipWithError("the swing-up diverged before its first update");
+    return;
+  }
+  for (auto _ : state) {
+    if (f.next == f.t.size()) {
+      f.solver.emplace(*f.start);
+      f.next = 0;
+    }
+    const size_t k = f.next++;
+    const bool ok = f.solver->update(f.t[k], f.q[k], f.v[k]);
+    benchmark::DoNotOptimize(ok);
+    benchmark::DoNotOptimize(f.solver->solution().data());
+  }
+  state.counters["kmax"] = kmax;
+  state.counters["unknowns_per_stage"] = f.run->controller().problem().stage_dim();
+  state.counters["states"] = static_cast<double>(f.t.size());
+}
+
 void BM_Riccati(benchmark::State& state, Formulation f, int n, int N) {
   RiccatiFixture& fx = riccati_fixture(f, n, N);
   if (fx.t.empty()) {
@@ -437,6 +502,14 @@ void register_all() {
       benchmark::RegisterBenchmark(
           ("BM_Riccati/" + to_string(f) + "/n:" + std::to_string(n) + "/N:" + std::to_string(N)).c_str(), BM_Riccati,
           f, n, N)
+          ->Unit(benchmark::kMicrosecond);
+    }
+  }
+  for (int kmax : {10, 20}) {
+    for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+      benchmark::RegisterBenchmark(
+          ("BM_UnderActuated/" + to_string(f) + "/cartpole/kmax:" + std::to_string(kmax)).c_str(), BM_UnderActuated,
+          f, kmax)
           ->Unit(benchmark::kMicrosecond);
     }
   }
