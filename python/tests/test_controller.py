@@ -303,3 +303,18 @@ def test_the_riccati_solver_from_a_task_and_from_settings():
     bad.iterations = 0
     with pytest.raises(ValueError, match="iterations"):
         bad.validate()
+
+
+@pytest.mark.parametrize("formulation", ["fd", "id"])
+def test_under_actuated_task_runs_from_python_and_leaves_the_passive_joint_alone(formulation):
+    # the shipped cart-pole swing-up, its first 0.3 s: the hinge has no actuator
+    task = idmpc.load_task(str(MJCF / "cartpole_swingup.json"))
+    task.formulation = formulation
+    task.duration = 0.3
+    run = idmpc.TaskRun(task)
+    assert run.model.unactuated_joints == [1] and run.model.actuated_joints == [0]
+    assert np.isinf(run.torque_lower[1]) and np.isinf(run.torque_upper[1])
+    r = run.run()
+    assert r["summary"]["diverged"] is False
+    assert np.all(r["u"][:, 1] == 0) and np.all(r["u_commanded"][:, 1] == 0)
+    assert np.all(np.abs(r["u"][:, 0]) <= 10) and np.abs(r["u"][:, 0]).max() > 5
