@@ -148,7 +148,7 @@ def test_each_attribute_is_its_own_field(name):
         for key in keys:
             value = value[key]
         if value == "auto":
-            value = []
+            value = 0 if attribute == "kmax" else []  # kmax 0: "auto"
         if isinstance(getattr(task, attribute), list) and not isinstance(value, list):
             value = [value]
         assert getattr(task, attribute) == value, attribute

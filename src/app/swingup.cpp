@@ -58,7 +58,9 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
   add(sub.add_option("--derivatives", t.derivatives, "matrix (the paper's) or adjoint (O(n))"),
       [](const Task& s, Task& d) { d.derivatives = s.derivatives; });
   add(sub.add_option("--N", t.N, "horizon steps"), [](const Task& s, Task& d) { d.N = s.N; });
-  add(sub.add_option("--kmax", t.kmax, "GMRES iterations per update"), [](const Task& s, Task& d) { d.kmax = s.kmax; });
+  add(sub.add_option("--kmax", t.kmax, "GMRES iterations per update (default: 10, 20 on an under-actuated model)")
+          ->check(CLI::Range(1, std::numeric_limits<int>::max())),
+      [](const Task& s, Task& d) { d.kmax = s.kmax; });
   add(sub.add_option("--Tf", t.Tf, "final horizon length [s]"), [](const Task& s, Task& d) { d.Tf = s.Tf; });
   add(sub.add_option("--alpha", t.alpha, "horizon growth rate [1/s]"), [](const Task& s, Task& d) { d.alpha = s.alpha; });
   add(sub.add_option("--dt", t.dt, "sampling period and plant step [s]"), [](const Task& s, Task& d) { d.dt = s.dt; });

@@ -13,6 +13,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "idmpc/dynamics/dynamics.hpp"
@@ -64,6 +65,7 @@ struct ProblemData {
   OcpWeights w;
   VecX<double> q_ref, q0, v0, d_hat;
   TorqueLimits limits;
+  MatX<double> P;  ///< terminal weight ½eᵀPe (empty: the diagonal one)
 };
 
 // J(U): the stage block is (input, d, ρ, ν) as OcpProblem::stage_dim says
@@ -78,6 +80,12 @@ double augmented_cost(const Model& model, Data& data, Formulation f, const Probl
   auto phi = [&](const VecX<double>& q, const VecX<double>& v) {
     const VecX<double> e = q - s.q_ref;
     return 0.5 * e.dot(s.w.Qq.cwiseProduct(e)) + 0.5 * v.dot(s.w.Qv.cwiseProduct(v));
+  };
+  auto terminal = [&](const VecX<double>& q, const VecX<double>& v) {
+    if (s.P.size() == 0) return phi(q, v);
+    VecX<double> e(2 * n);
+    e << q - s.q_ref, v;
+    return 0.5 * e.dot(s.P * e);
   };
   VecX<double> q = s.q0, v = s.v0;
   double J = 0;
@@ -106,7 +114,7 @@ double augmented_cost(const Model& model, Data& data, Formulation f, const Probl
     v += dtau * a;
     q = q_next;
   }
-  return J + phi(q, v);
+  return J + terminal(q, v);
 }
 
 using Case = std::tuple<std::string, Formulation, DerivativeMode>;
@@ -133,11 +141,16 @@ TEST_P(UnderActuation, ResidualIsTheGradientOfTheAugmentedCost) {
   s.limits.lower = VecX<double>::Constant(n, -30.0);
   s.limits.upper = VecX<double>::Constant(n, 40.0);
 
-  for (const bool lanes : {true, false}) {
-    SCOPED_TRACE(lanes ? "stages in lanes" : "stage by stage");
+  // the terminal cost as an LQR value would be: a symmetric positive definite P
+  const MatX<double> L = MatX<double>::Random(2 * n, 2 * n);
+  const MatX<double> P = L * L.transpose() + MatX<double>::Identity(2 * n, 2 * n);
+  for (const auto& [lanes, with_P] : {std::pair{true, false}, {true, true}, {false, false}, {false, true}}) {
+    SCOPED_TRACE(std::string(lanes ? "stages in lanes" : "stage by stage") + (with_P ? ", terminal P" : ""));
+    s.P = with_P ? P : MatX<double>();
     Shooting ocp(model, formulation, mode, s.w, s.q_ref, N, s.limits);
     ocp.set_stage_batching(lanes);
     ocp.problem().set_disturbance(s.d_hat);
+    ocp.problem().set_terminal_weight(s.P);
     const OcpProblem& problem = ocp.problem();
     const int nu = model.n_actuated(), m = problem.m();
     const bool fd = formulation == Formulation::kForwardDynamics;

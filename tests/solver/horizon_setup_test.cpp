@@ -184,3 +184,86 @@ TEST(HorizonSetup, RefusesSettingsOfTheWrongSizeAndKeepsTheModelsFriction) {
 
 }  // namespace
 }  // namespace idmpc
+
+namespace idmpc {
+namespace {
+
+// an under-actuated model's terminal cost: P solves the Riccati equation of the horizon step
+// linearized at the target, recomputed here from central differences of ABA (not the analytic
+// derivatives the setup uses); none on a fully actuated model or off an equilibrium
+TEST(HorizonSetup, UnderActuatedTerminalCostIsTheLqrValueOfTheTarget) {
+  const test::Problem p = test::load_problem(IDMPC_SOURCE_DIR "/mjcf/cartpole.xml");
+  const Model& model = p.model;
+  ASSERT_TRUE(model.under_actuated());
+  const int n = model.n;
+  ControllerSettings s = settings_of(model, 0.5, 25);
+  s.q_ref = VecX<double>::Zero(n);  // upright: an equilibrium of the passive hinge
+  const HorizonSetup setup = setup_horizon(model, s);
+  const MatX<double>& P = setup.terminal_weight;
+  ASSERT_EQ(P.rows(), 2 * n);
+  ASSERT_EQ(P.cols(), 2 * n);
+  EXPECT_TRUE(std::any_of(setup.notes.begin(), setup.notes.end(),
+                          [](const std::string& s) { return s.find("LQR value") != std::string::npos; }));
+
+  // the linearized Euler step of the horizon model, by central differences
+  const double dtau = 0.5 / 25;
+  const Model& hm = *setup.horizon_model;
+  Data data(hm);
+  const VecX<double> zero = VecX<double>::Zero(n);
+  const VecX<double> tau = rnea(hm, data, s.q_ref, zero, zero);
+  auto f = [&](const VecX<double>& x, double u) {
+    VecX<double> t = tau;
+    t[model.actuated_joints[0]] += u;
+    const VecX<double> a = aba(hm, data, x.head(n), x.tail(n), t);
+    VecX<double> next(2 * n);
+    next << x.head(n) + dtau * x.tail(n), x.tail(n) + dtau * a;
+    return next;
+  };
+  const double e = 1e-6;
+  MatX<double> A(2 * n, 2 * n), B(2 * n, 1);
+  const VecX<double> x0 = VecX<double>::Zero(2 * n);
+  for (int c = 0; c < 2 * n; ++c) {
+    VecX<double> dx = VecX<double>::Zero(2 * n);
+    dx[c] = e;
+    A.col(c) = (f(x0 + dx, 0) - f(x0 - dx, 0)) / (2 * e);
+  }
+  B.col(0) = (f(x0, e) - f(x0, -e)) / (2 * e);
+  VecX<double> qd(2 * n);
+  qd << setup.weights.Qq, setup.weights.Qv;
+  const MatX<double> Q = dtau * MatX<double>(qd.asDiagonal());
+  const double R = dtau * setup.weights.R[model.actuated_joints[0]];
+  const MatX<double> PB = P * B;
+  const MatX<double> residual =
+      Q + A.transpose() * P * A - A.transpose() * PB * (1.0 / (R + (B.transpose() * PB)(0, 0))) * PB.transpose() * A - P;
+  EXPECT_LE(residual.cwiseAbs().maxCoeff(), 1e-6 * P.cwiseAbs().maxCoeff()) << residual;
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX<double>>(P).eigenvalues().minCoeff(), 0);
+
+  // off an equilibrium (the pole tilted: the hinge would need a torque) and fully actuated: none
+  s.q_ref[1] = 0.3;
+  const HorizonSetup tilted = setup_horizon(model, s);
+  EXPECT_EQ(tilted.terminal_weight.size(), 0);
+  EXPECT_TRUE(std::any_of(tilted.notes.begin(), tilted.notes.end(),
+                          [](const std::string& s) { return s.find("not an equilibrium") != std::string::npos; }));
+  const test::Problem arm = test::load_problem(kArm4);
+  EXPECT_EQ(setup_horizon(arm.model, settings_of(arm.model, 0.5, 25)).terminal_weight.size(), 0);
+}
+
+TEST(HorizonSetup, DareSolutionOfAScalarSystemIsTheClosedForm) {
+  // x⁺ = a x + b u, cost q x² + r u²: P = q + a²P − a²b²P²/(r + b²P), the positive root
+  const double a = 1.3, b = 0.5, q = 2.0, r = 0.7;
+  const MatX<double> P = solve_dare(MatX<double>::Constant(1, 1, a), MatX<double>::Constant(1, 1, b),
+                                    MatX<double>::Constant(1, 1, q), MatX<double>::Constant(1, 1, r));
+  ASSERT_EQ(P.size(), 1);
+  // b²P² + (r − a²r − qb²)P − qr = 0
+  const double A2 = b * b, B1 = r - a * a * r - q * b * b, C0 = -q * r;
+  const double expected = (-B1 + std::sqrt(B1 * B1 - 4 * A2 * C0)) / (2 * A2);
+  EXPECT_NEAR(P(0, 0), expected, 1e-12 * expected);
+  // not stabilizable: an unstable mode no input reaches
+  EXPECT_EQ(solve_dare(MatX<double>::Constant(1, 1, a), MatX<double>::Zero(1, 1), MatX<double>::Constant(1, 1, q),
+                       MatX<double>::Constant(1, 1, r))
+                .size(),
+            0);
+}
+
+}  // namespace
+}  // namespace idmpc

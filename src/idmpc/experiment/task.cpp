@@ -258,7 +258,12 @@ Task task_from_json(const nlohmann::json& j, const std::string& where, const Tas
     const Reader c = r.sub("cgmres");
     c.known({"N", "kmax", "Tf", "alpha", "dt", "zeta", "h", "init_full_horizon", "shooting", "products"});
     c.get("N", t.N);
-    c.get("kmax", t.kmax);
+    if (c.has("kmax") && c.j.at("kmax") == "auto") {
+      t.kmax = 0;
+    } else {
+      c.get("kmax", t.kmax);
+      if (c.has("kmax") && t.kmax < 1) c.bad("kmax", "a positive integer or \"auto\"");
+    }
     c.get("Tf", t.Tf);
     c.get("alpha", t.alpha);
     c.get("dt", t.dt);
@@ -308,7 +313,7 @@ const Task& arm_defaults() {
     t.Qa = {0};
     t.Qa_fallback = 1e-4;
     t.N = 25;
-    t.kmax = 10;
+    t.kmax = 0;  // "auto": kDefaultKmax, more on an under-actuated model (TaskRun)
     t.Tf = 0.5;
     t.alpha = 0;
     t.dt = 1e-3;
@@ -360,7 +365,7 @@ nlohmann::json to_json(const Task& t) {
   if (!t.torque_limit.empty()) j["torque_limit"] = t.torque_limit;
   j["weights"] = {{"Qq", or_auto(t.Qq)}, {"Qv", or_auto(t.Qv)}, {"Qa", t.Qa}, {"R", or_auto(t.R)},
                   {"Qa_fallback", t.Qa_fallback}};
-  j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax}, {"Tf", t.Tf}, {"alpha", t.alpha},
+  j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax > 0 ? json(t.kmax) : json("auto")}, {"Tf", t.Tf}, {"alpha", t.alpha},
                  {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon},
                  {"shooting", t.shooting}, {"products", t.products}};
   // written only for the Riccati solver: a C/GMRES task reads and hashes as it always has
@@ -483,7 +488,7 @@ ResolvedTask resolve(const Task& t, int n) {
     }
     r.q0 = finite(Eigen::Map<const VecX<double>>(t.q0.data(), n), "--q0 (q0)");
   }
-  c.cgmres.kmax = t.kmax;
+  c.cgmres.kmax = t.kmax > 0 ? t.kmax : kDefaultKmax;
   c.cgmres.Tf = t.Tf;
   c.cgmres.alpha = t.alpha;
   c.cgmres.dt = t.dt;

@@ -53,7 +53,7 @@
 ///                  object's for both
 ///   "riccati"      {"iterations" per update (1: real-time iteration), "tolerance",
 ///                  "init_iterations", "init_tolerance", "barrier", "line_search"}
-///   "cgmres"       {"N", "kmax", "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
+///   "cgmres"       {"N", "kmax" (or "auto"), "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
 ///                  "init_full_horizon": solve the full-horizon problem at t = 0 before the loop
 ///                  (needs an open horizon, e.g. alpha = 0; see Cgmres::initialize),
 ///                  "shooting": "single" or "multiple" (formulations.md §Multiple shooting)}
@@ -111,7 +111,7 @@ struct Task {
   std::vector<double> torque_limit;  ///< empty: the model's actuator ranges
   std::vector<double> Qq, Qv, Qa, R; ///< empty: "auto" (Qq, Qv, R only)
   double Qa_fallback = 0;
-  int N = 0, kmax = 0;
+  int N = 0, kmax = 0;  ///< kmax 0: "auto", kDefaultKmax (kUnderActuatedKmax on an under-actuated model)
   double Tf = 0, alpha = 0, dt = 0, zeta = 0, h = 0;
   bool init_full_horizon = false;
   std::string shooting;  ///< "single" or "multiple"
@@ -138,6 +138,12 @@ const Task& paper_task();
 /// @brief The defaults for real arms, the base of every task file but the paper's (each field
 /// and its reason in docs/tasks.md).
 const Task& arm_defaults();
+
+/// @brief C/GMRES's GMRES iterations per update where a task leaves kmax "auto": the paper's 10,
+/// and 20 on an under-actuated model, whose ID stages carry the passive torques' multipliers
+/// (docs/tasks.md; measured on the cart-pole, ID's closed loop needs at least 15).
+inline constexpr int kDefaultKmax = 10;
+inline constexpr int kUnderActuatedKmax = 20;
 
 nlohmann::json to_json(const Task& task);
 

@@ -86,6 +86,16 @@ TaskRun::TaskRun(const Task& task)
   plant_ = std::make_unique<Plant>(m, imported_.actuation);
   const std::string timestep_warning = plant_->set_control_period(resolved_.controller.cgmres.dt);
   ControllerSettings& cs = resolved_.controller;
+  // kmax "auto": more GMRES iterations for an under-actuated model's stages (task.hpp); the
+  // task as run records the number
+  if (task_.kmax == 0) {
+    task_.kmax = model_->under_actuated() ? kUnderActuatedKmax : kDefaultKmax;
+    cs.cgmres.kmax = task_.kmax;
+    if (model_->under_actuated() && cs.solver == SolverKind::kCgmres) {
+      auto_notes_.push_back("kmax \"auto\": " + std::to_string(task_.kmax) +
+                            " GMRES iterations per update (an under-actuated model)");
+    }
+  }
   cs.q_start = resolved_.q0;
   cs.frame_target = frame_target_;
   (frame_target_ ? cs.frame_reference : cs.joint_reference) = reference_;

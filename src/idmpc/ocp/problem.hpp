@@ -100,6 +100,8 @@ class OcpProblem {
   void set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation) {
     terms_.set_frame_pose(position, rotation);
   }
+  /// @brief The terminal cost's joint terms as ½eᵀP e (StageTerms::set_terminal_weight).
+  void set_terminal_weight(const MatX<double>& P) { terms_.set_terminal_weight(P); }
   /// @brief The references every stage sees (StageTerms): q_ref(i), v_ref(i), u_ref(i), frame.
   const StageTerms& terms() const { return terms_; }
   /// @brief Stage i's references at t0 + i·Δτ (what moves; nothing when nothing does).

@@ -96,6 +96,7 @@ StageTerms::StageTerms(const StageTerms& o)
       t0_(o.t0_),
       dtau_(o.dtau_),
       sampled_(o.sampled_),
+      terminal_P_(o.terminal_P_),
       frame_(o.frame_),
       frame_id_(o.frame_id_),
       p_ref_(o.p_ref_) {}
@@ -151,6 +152,20 @@ void StageTerms::set_frame_target(std::optional<FrameTarget> target) {
   frame_ = target;
   frame_id_ = next_frame_id();
   p_ref_ = frame_->position.replicate(1, N_ + 1);
+}
+
+void StageTerms::set_terminal_weight(const MatX<double>& P) {
+  const int n2 = 2 * n();
+  if (P.size() == 0) {
+    terminal_P_.resize(0, 0);
+    return;
+  }
+  if (P.rows() != n2 || P.cols() != n2 || !P.allFinite() || !P.isApprox(P.transpose(), 1e-12)) {
+    throw std::invalid_argument("terminal weight: expected a finite symmetric " + std::to_string(n2) + " x " +
+                                std::to_string(n2) + " matrix, got " + std::to_string(P.rows()) + " x " +
+                                std::to_string(P.cols()));
+  }
+  terminal_P_ = P;
 }
 
 void StageTerms::set_frame_trajectory(std::shared_ptr<const Trajectory> p_ref) {
@@ -269,8 +284,21 @@ void StageTerms::state_gradient_of(int i, RefIn<S> q, RefIn<S> v, RefOut<S> L_q,
                                    FrameScratch<S>& scratch) const {
   const VecX<double>& Qq = cost_.weights().Qq;
   const VecX<double>& Qv = cost_.weights().Qv;
-  L_q = Qq.cwiseProduct(q - q_ref_.col(i));
-  L_v = Qv.cwiseProduct(v - v_ref_.col(i));
+  if (i == N_ && terminal_P_.size() > 0) {
+    // P e, e = (q − q_ref, v − v_ref), row by row (P is double, e may be dual)
+    const int n = this->n();
+    for (int r = 0; r < 2 * n; ++r) {
+      S sum = S(0.0);
+      for (int c = 0; c < n; ++c) {
+        sum += terminal_P_(r, c) * (q[c] - q_ref_(c, i));
+        sum += terminal_P_(r, n + c) * (v[c] - v_ref_(c, i));
+      }
+      (r < n ? L_q[r] : L_v[r - n]) = sum;
+    }
+  } else {
+    L_q = Qq.cwiseProduct(q - q_ref_.col(i));
+    L_v = Qv.cwiseProduct(v - v_ref_.col(i));
+  }
   if (!frame_) return;
   // Jᵀf with f_lin = w_p∘(p − p_ref), f_ang = ½w_o vee(A − Aᵀ), A = R R_refᵀ (cost.hpp)
   if (scratch.frame_id != frame_id_) {
@@ -309,7 +337,10 @@ namespace idmpc {
 
 void StageTerms::state_hessian(int i, In q, Eigen::Ref<MatX<double>> H_qq, Out H_vv,
                                FrameScratch<double>& scratch) const {
-  (void)i;  // the weights and the target's orientation are the same at every stage
+  // the weights and the target's orientation are the same at every stage
+  if (i == N_ && terminal_P_.size() > 0) {
+    throw std::logic_error("the terminal weight matrix has no Gauss-Newton Hessian here (C/GMRES only)");
+  }
   const OcpWeights& w = cost_.weights();
   H_qq.setZero();
   H_qq.diagonal() = w.Qq;

@@ -115,6 +115,14 @@ class StageTerms {
   /// target; a position the frame trajectory, if any, overrides).
   void set_frame_pose(const Vec3<double>& position, const Mat3<double>& rotation);
 
+  /// @brief The terminal cost's joint terms as one quadratic ½eᵀP e of e = (q − q_ref,N,
+  /// v − v_ref,N) instead of the diagonal Q_q, Q_v (an under-actuated model's LQR value at its
+  /// target: horizon_setup.hpp); the frame term, if any, is added as before. P: 2n × 2n, finite,
+  /// symmetric (else std::invalid_argument); empty: back to the diagonal. A Gauss–Newton
+  /// Hessian of it is not offered: state_hessian throws std::logic_error at the terminal stage.
+  void set_terminal_weight(const MatX<double>& P);
+  const MatX<double>& terminal_weight() const { return terminal_P_; }
+
   /// @brief Stage i's references at t_i = t0 + i·Δτ (i = 0 … N) for what moves; allocation-free,
   /// and nothing at all when (t0, Δτ) is the last one given or nothing moves.
   void set_stage_times(double t0, double dtau);
@@ -236,6 +244,7 @@ class StageTerms {
   double t0_ = 0, dtau_ = 0;  ///< stage times of the references' samples
   bool sampled_ = false;      ///< whether the moving references hold samples at (t0_, dtau_)
 
+  MatX<double> terminal_P_;  ///< set_terminal_weight (empty: the diagonal weights)
   std::optional<FrameTarget> frame_;
   std::uint64_t frame_id_ = 0;          ///< the frame target's, unique per set_frame_target (0: none)
   MatX<double> p_ref_;                  ///< 3 × (N+1) frame positions

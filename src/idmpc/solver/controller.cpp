@@ -25,6 +25,7 @@ OcpProblem make_problem(const HorizonSetup& setup, const ControllerSettings& s) 
   }
   OcpProblem problem(setup.horizon_model, s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
   problem.set_frame_target(s.frame_target);
+  problem.set_terminal_weight(setup.terminal_weight);
   if (s.frame_reference) problem.set_frame_trajectory(s.frame_reference);
   if (s.joint_reference) problem.set_joint_trajectory(s.joint_reference);
   return problem;

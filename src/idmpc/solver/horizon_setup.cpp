@@ -119,6 +119,87 @@ ImplicitDamping parse_implicit_damping(const std::string& s) {
   throw std::invalid_argument("implicit damping: expected \"off\", \"on\" or \"auto\", got \"" + s + "\"");
 }
 
+MatX<double> solve_dare(const MatX<double>& A, const MatX<double>& B, const MatX<double>& Q, const MatX<double>& R) {
+  const Eigen::Index nx = A.rows();
+  MatX<double> Ak = A, G = B * R.llt().solve(B.transpose()), H = Q;
+  const MatX<double> I = MatX<double>::Identity(nx, nx);
+  for (int it = 0; it < 100; ++it) {
+    const Eigen::PartialPivLU<MatX<double>> W(I + G * H);
+    const MatX<double> WA = W.solve(Ak);
+    const MatX<double> H1 = H + Ak.transpose() * H * WA;
+    G += Ak * W.solve(G * Ak.transpose());
+    Ak = Ak * WA;
+    const double change = (H1 - H).norm();
+    H = 0.5 * (H1 + H1.transpose());
+    if (!H.allFinite()) return {};
+    if (change <= 1e-12 * H.norm()) {
+      // stabilizing: the closed loop A − B K has its eigenvalues inside the unit circle
+      const MatX<double> K = (R + B.transpose() * H * B).ldlt().solve(B.transpose() * H * A);
+      const Eigen::EigenSolver<MatX<double>> eig(A - B * K, false);
+      if (!(eig.eigenvalues().cwiseAbs().maxCoeff() < 1)) return {};
+      return H;
+    }
+  }
+  return {};
+}
+
+namespace {
+
+// the LQR value of the fixed joint target of an under-actuated model (horizon_setup.hpp), or
+// empty with a note saying why not
+MatX<double> terminal_lqr(const Model& model, const ControllerSettings& s, const OcpWeights& w, double dtau,
+                          std::vector<std::string>& notes) {
+  const int n = model.n, nu = model.n_actuated();
+  if (!model.under_actuated()) return {};
+  if (s.frame_target) {
+    notes.push_back("under-actuated with a frame target: the terminal cost keeps its diagonal weights");
+    return {};
+  }
+  if (s.solver == SolverKind::kCgmres && s.cgmres.alpha != 0) {
+    // a growing horizon: its step is not the one P is for, and a swing-up starts far from the
+    // target, where the target's LQR value means nothing
+    notes.push_back("under-actuated with a growing horizon (alpha > 0): the terminal cost keeps its diagonal weights");
+    return {};
+  }
+  Data data(model);
+  const VecX<double> zero = VecX<double>::Zero(n);
+  const VecX<double> tau = rnea(model, data, s.q_ref, zero, zero);
+  for (int j : model.unactuated_joints) {
+    if (std::abs(tau[j]) > 1e-9 * (1 + tau.cwiseAbs().maxCoeff())) {
+      notes.push_back("the target needs " + text(tau[j]) + " on passive joint '" +
+                      model.joint_names[static_cast<size_t>(j)] +
+                      "' (not an equilibrium): the terminal cost keeps its diagonal weights");
+      return {};
+    }
+  }
+  aba(model, data, s.q_ref, zero, tau);
+  aba_derivatives_after_aba(model, data, s.q_ref, zero);
+  MatX<double> A = MatX<double>::Identity(2 * n, 2 * n), B = MatX<double>::Zero(2 * n, nu);
+  A.topRightCorner(n, n) = dtau * MatX<double>::Identity(n, n);
+  A.bottomLeftCorner(n, n) += dtau * data.da_dq;
+  A.bottomRightCorner(n, n) += dtau * data.da_dv;
+  MatX<double> R = MatX<double>::Zero(nu, nu);
+  for (int k = 0; k < nu; ++k) {
+    const int j = model.actuated_joints[static_cast<size_t>(k)];
+    B.bottomRows(n).col(k) = dtau * data.Minv.col(j);
+    R(k, k) = dtau * w.R[j];
+  }
+  VecX<double> q(2 * n);
+  q << w.Qq, w.Qv;
+  const MatX<double> P = solve_dare(A, B, MatX<double>(dtau * q.asDiagonal()), R);
+  if (P.size() == 0) {
+    notes.push_back("under-actuated: the target's Riccati equation has no stabilizing solution (not stabilizable "
+                    "at this step?): the terminal cost keeps its diagonal weights");
+    return {};
+  }
+  notes.push_back("under-actuated: terminal cost = the LQR value of the target (Riccati equation of the horizon step " +
+                  text(dtau) + " s at q_ref; largest eigenvalue " + text(P.selfadjointView<Eigen::Lower>().eigenvalues().maxCoeff()) +
+                  ")");
+  return P;
+}
+
+}  // namespace
+
 HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   const int n = model.n;
   auto check_size = [n](const VecX<double>& x, const char* name, bool may_be_empty) {
@@ -202,8 +283,9 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   auto horizon_model = std::make_shared<const Model>(with_implicit_damping(with_friction, implicit_step));
   auto plant_model = std::make_shared<const Model>(with_implicit_damping(with_friction, s.plant_step));
   OcpWeights weights = auto_weights(s, configurations, with_friction, stepped, dtau, lower, upper, notes);
+  MatX<double> terminal = terminal_lqr(*horizon_model, s, weights, dtau, notes);
   return HorizonSetup{std::move(plant_model), std::move(horizon_model), std::move(weights), implicit, ratio,
-                      std::move(eps), std::move(notes)};
+                      std::move(eps), std::move(notes), std::move(terminal)};
 }
 
 }  // namespace idmpc

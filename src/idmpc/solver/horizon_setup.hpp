@@ -24,12 +24,22 @@
 ///   than ω = 0.35/Δτ (17.5 rad/s at the default Δτ = 20 ms), well inside what the step resolves.
 /// - The plant model (torque rule, observer) takes the damping implicitly over one plant step, as
 ///   MuJoCo's Euler and implicit integrators do.
+/// - An under-actuated model's terminal cost is the LQR value ½eᵀP e of its fixed joint target
+///   (formulations.md §Under-actuation): P solves the discrete algebraic Riccati equation of the
+///   horizon's explicit Euler step Δτ = T_f/N linearized at (q_ref, 0) with the actuators' holding
+///   torque, stage weights Δτ·diag(Q_q, Q_v) and Δτ·R on the actuated joints, so that the horizon
+///   ends on the cost of the infinite horizon near the target and a short horizon still stabilizes
+///   the passive joints. Not with a growing horizon (C/GMRES with alpha > 0: its step is not P's,
+///   and a swing-up starts far from where the LQR value means anything), where the target needs a
+///   torque on a passive joint (not an equilibrium), with a frame target, or where the equation
+///   has no stabilizing solution: then the diagonal terminal weights, with a note.
 
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "idmpc/model/model.hpp"
+#include "idmpc/spatial/spatial.hpp"
 #include "idmpc/solver/controller_settings.hpp"
 
 namespace idmpc {
@@ -48,7 +58,13 @@ struct HorizonSetup {
   double damping_step_ratio = 0;   ///< Δτ·max eig(M⁻¹D) over q_start and q_ref
   VecX<double> friction_velocity;  ///< ε per joint (0 where there is no friction)
   std::vector<std::string> notes;  ///< what was chosen automatically, and why
+  MatX<double> terminal_weight;    ///< under-actuated: the LQR value's P (2n × 2n), else empty
 };
+
+/// @brief P of the discrete algebraic Riccati equation P = Q + AᵀPA − AᵀPB(R + BᵀPB)⁻¹BᵀPA
+/// (Q, R symmetric, R positive definite), by the structured doubling algorithm; empty if it does
+/// not converge to a finite stabilizing solution.
+MatX<double> solve_dare(const MatX<double>& A, const MatX<double>& B, const MatX<double>& Q, const MatX<double>& R);
 
 /// @brief The horizon model and weights of `settings` on `model` (the rigid-body model, without
 /// the plant's friction loss, which settings.friction_loss gives). Throws std::invalid_argument
