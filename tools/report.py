@@ -1,7 +1,8 @@
 #!/usr/bin/env -S /usr/bin/python3
 """Writes the main job's Markdown report from the swing-up summaries and logs.
 
-Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix_paper,matrix,adjoint,riccati}.{json,csv};
+Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix_paper,matrix,adjoint,riccati}.{json,csv},
+cartpole_{fd,id}.json;
 writes report.md)
 """
 import json
@@ -72,6 +73,12 @@ def main():
         if not os.path.exists(path):
             sys.exit(f"report.py: missing summary '{path}'")
         riccati[f] = read_summary(path)
+    cartpole = {}
+    for f in ("fd", "id"):
+        path = os.path.join(out_dir, f"cartpole_{f}.json")
+        if not os.path.exists(path):
+            sys.exit(f"report.py: missing summary '{path}'")
+        cartpole[f] = read_summary(path)
     lines = ["# idmpc: the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s)", ""]
     lines += [f"Machine: {cpu_model()}, {os.cpu_count()} cores; {compiler()}; Release build "
               "(`-O3`, `-march=native` for this job).", ""]
@@ -102,6 +109,14 @@ def main():
                  f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}): there both formulations pay the same stage "
                  "Jacobians and recursion, and ID saves only the ABA derivatives and the dense dynamics products "
                  "(docs/solvers.md)")
+    fd, idd = cartpole["fd"], cartpole["id"]
+    outcome = {f: ("diverged at %.3f s" % s["diverged_at"] if s["diverged"] else
+                   ("reached" if s["reached"] else "not reached") + " (final %.1e)" % s["final_q_error"])
+               for f, s in cartpole.items()}
+    lines.append(f"- Under-actuated cart-pole swing-up (mjcf/cartpole_swingup.json, C/GMRES, kmax = "
+                 f"{fd['task']['cgmres']['kmax']}): ID/FD {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
+                 f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); FD {outcome['fd']}, ID {outcome['id']}; "
+                 "`fig2_cartpole.png`")
     lines += ["", "Same control from both formulations (Q_a = 0): relative RMS difference of the torque "
               "histories, RMS of |u_ID − u_FD| over RMS of |u_FD|:", ""]
     for d, name in VARIANTS:

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The README's main command: installs dependencies, builds idmpc (Release, -march=native), runs
 # the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s) with both formulations and both
-# derivative modes, and under the Riccati solver, then writes into results/: logs, summaries, the
-# Fig. 2 plots (C/GMRES, Riccati), the FD-vs-ID video and a short report.
+# derivative modes, and under the Riccati solver, and the under-actuated cart-pole's swing-up, then
+# writes into results/: logs, summaries, the Fig. 2 plots (C/GMRES, Riccati, cart-pole), the
+# FD-vs-ID video and a short report.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 results=${IDMPC_RESULTS:-$here/results}
@@ -37,12 +38,23 @@ for f in fd id; do
     --log "$results/swingup_${f}_riccati.csv" --summary "$results/swingup_${f}_riccati.json"
 done
 
+# an under-actuated model: the cart-pole, its pole passive, swung up by the cart's force alone
+for f in fd id; do
+  echo "== cart-pole swing-up: C/GMRES (${f^^})"
+  "$idmpc" swingup --task "$here/mjcf/cartpole_swingup.json" --formulation "$f" \
+    --log "$results/cartpole_${f}.csv" --summary "$results/cartpole_${f}.json"
+done
+
 echo "== Fig. 2"
 /usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
   --labels "C/GMRES (FD)" "C/GMRES (ID)" --residual -o "$results/fig2.png"
 
 /usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_riccati.csv" "$results/swingup_id_riccati.csv" \
   --labels "Riccati (FD)" "Riccati (ID)" --residual -o "$results/fig2_riccati.png"
+
+/usr/bin/python3 "$here/tools/plot_fig2.py" "$results/cartpole_fd.csv" "$results/cartpole_id.csv" \
+  --labels "C/GMRES (FD)" "C/GMRES (ID)" --residual --title "Cart-pole swing-up (the pole passive)" \
+  -o "$results/fig2_cartpole.png"
 
 echo "== video"
 "$idmpc" render "$model" --compare "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
@@ -51,4 +63,4 @@ echo "== video"
 echo "== report"
 /usr/bin/python3 "$here/tools/report.py" "$results"
 echo
-echo "results in $results: report.md, fig2.png, fig2_riccati.png, swingup_fd_vs_id.mp4, swingup_*.csv, swingup_*.json"
+echo "results in $results: report.md, fig2.png, fig2_riccati.png, fig2_cartpole.png, swingup_fd_vs_id.mp4, swingup_*.csv, swingup_*.json, cartpole_*"
