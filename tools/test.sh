@@ -74,6 +74,9 @@ env -u IDMPC_DATA_DIR "$stage/example/closed_loop" "$prefix/share/idmpc/mjcf/lit
 # the formulation and the solver chosen on its command line
 env -u IDMPC_DATA_DIR "$stage/example/closed_loop" "$prefix/share/idmpc/mjcf/lite6_reach.json" 200 fd riccati \
   | grep -q "^riccati (fd) on "
+# an under-actuated task: the cart-pole, its pole passive
+env -u IDMPC_DATA_DIR "$stage/example/closed_loop" "$prefix/share/idmpc/mjcf/cartpole_swingup.json" 300 id \
+  | grep -q "^cgmres (id) on "
 # the installed command: 0 (reached) or 2 (not reached in 0.2 s) completed the run
 status=0
 env -u IDMPC_DATA_DIR "$prefix/bin/idmpc" swingup --duration 0.2 || status=$?
