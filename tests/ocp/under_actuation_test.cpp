@@ -122,7 +122,8 @@ using Case = std::tuple<std::string, Formulation, DerivativeMode>;
 class UnderActuation : public ::testing::TestWithParam<Case> {};
 
 TEST_P(UnderActuation, ResidualIsTheGradientOfTheAugmentedCost) {
-  const auto& [name, formulation, mode] = GetParam();
+  const auto& [name, formulation_binding, mode] = GetParam();
+  const Formulation formulation = formulation_binding;  // a variable the lambdas may capture (C++17)
   const Problem p = problem_of(name);
   const Model& model = p.model;
   ASSERT_TRUE(model.under_actuated());
