@@ -213,6 +213,20 @@ void common_counters(benchmark::State& state, const Case& c, const SolverFixture
   state.counters["states"] = static_cast<double>(f.t.size());
 }
 
+// the next recorded update of fixture f (its measured t, q, v) by its replaying solver; at the end
+// of the record, back to the solver that started it. Returns the update's F evaluations.
+template <typename Fixture> int replay_update(Fixture& f) {
+  if (f.next == f.t.size()) {
+    f.solver.emplace(*f.start);
+    f.next = 0;
+  }
+  const size_t k = f.next++;
+  const bool ok = f.solver->update(f.t[k], f.q[k], f.v[k]);
+  benchmark::DoNotOptimize(ok);
+  benchmark::DoNotOptimize(f.solver->solution().data());
+  return f.solver->evaluations();
+}
+
 // one C/GMRES update, cycling through the recorded measurements
 void BM_Update(benchmark::State& state, Case c) {
   SolverFixture& f = fixture(c);
@@ -221,17 +235,7 @@ void BM_Update(benchmark::State& state, Case c) {
     return;
   }
   long evaluations = 0;
-  for (auto _ : state) {
-    if (f.next == f.t.size()) {  // end of the record: back to the solver that started it
-      f.solver.emplace(*f.start);
-      f.next = 0;
-    }
-    const size_t k = f.next++;
-    const bool ok = f.solver->update(f.t[k], f.q[k], f.v[k]);
-    benchmark::DoNotOptimize(ok);
-    benchmark::DoNotOptimize(f.solver->solution().data());
-    evaluations += f.solver->evaluations();
-  }
+  for (auto _ : state) evaluations += replay_update(f);
   common_counters(state, c, f);
   const double iterations = static_cast<double>(state.iterations());
   state.counters["evals"] = evaluations / iterations;
@@ -413,16 +417,7 @@ void BM_UnderActuated(benchmark::State& state, Formulation formulation, int kmax
     state.SkipWithError("the swing-up diverged before its first update");
     return;
   }
-  for (auto _ : state) {
-    if (f.next == f.t.size()) {
-      f.solver.emplace(*f.start);
-      f.next = 0;
-    }
-    const size_t k = f.next++;
-    const bool ok = f.solver->update(f.t[k], f.q[k], f.v[k]);
-    benchmark::DoNotOptimize(ok);
-    benchmark::DoNotOptimize(f.solver->solution().data());
-  }
+  for (auto _ : state) replay_update(f);
   state.counters["kmax"] = kmax;
   state.counters["unknowns_per_stage"] = f.run->controller().problem().stage_dim();
   state.counters["states"] = static_cast<double>(f.t.size());

@@ -60,25 +60,15 @@ def main():
     if len(sys.argv) != 2:
         sys.exit("usage: report.py RESULTS_DIR")
     out_dir = sys.argv[1]
-    runs = {}
-    for f in ("fd", "id"):
-        for d, _ in VARIANTS:
-            path = os.path.join(out_dir, f"swingup_{f}_{d}.json")
-            if not os.path.exists(path):
-                sys.exit(f"report.py: missing summary '{path}'")
-            runs[(f, d)] = read_summary(path)
-    riccati = {}
-    for f in ("fd", "id"):
-        path = os.path.join(out_dir, f"swingup_{f}_riccati.json")
+    def summary(name):
+        path = os.path.join(out_dir, name + ".json")
         if not os.path.exists(path):
             sys.exit(f"report.py: missing summary '{path}'")
-        riccati[f] = read_summary(path)
-    cartpole = {}
-    for f in ("fd", "id"):
-        path = os.path.join(out_dir, f"cartpole_{f}.json")
-        if not os.path.exists(path):
-            sys.exit(f"report.py: missing summary '{path}'")
-        cartpole[f] = read_summary(path)
+        return read_summary(path)
+
+    runs = {(f, d): summary(f"swingup_{f}_{d}") for f in ("fd", "id") for d, _ in VARIANTS}
+    riccati = {f: summary(f"swingup_{f}_riccati") for f in ("fd", "id")}
+    cartpole = {f: summary(f"cartpole_{f}") for f in ("fd", "id")}
     lines = ["# idmpc: the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s)", ""]
     lines += [f"Machine: {cpu_model()}, {os.cpu_count()} cores; {compiler()}; Release build "
               "(`-O3`, `-march=native` for this job).", ""]

@@ -1,5 +1,6 @@
 // idmpc check MODEL: summary of the imported model, then our dynamics against MuJoCo and our
 // derivatives against finite differences at random states.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <stdexcept>
@@ -29,7 +30,8 @@ void print_summary(const mjModel* m, const mj::ImportedModel& imported, const st
     const Vec3<double>& s = model.axis[i];
     // a hinge moves by an angle under a torque, a slide by a length under a force
     const bool hinge = model.joint_type[i] == JointType::kRevolute;
-    const bool actuated = model.link(i).actuated;
+    const bool actuated =
+        std::find(model.unactuated_joints.begin(), model.unactuated_joints.end(), i) == model.unactuated_joints.end();
     std::printf("  %2d %-16s %-6s axis (%+.3f %+.3f %+.3f)  parent %2d  mass %.4g  q [%s], tau [%s]%s%s\n",
                 i, model.joint_names[i].c_str(), hinge ? "hinge" : "slide", s.x(), s.y(), s.z(),
                 model.parent[i], model.I[i].m, hinge ? "rad" : "m", hinge ? "N m" : "N",
