@@ -7,6 +7,9 @@
 // The augmented cost J(U) is rolled out here with only RNEA/ABA from the library, and
 // F = (1/Δτ) ∂J/∂U is checked by central differences in every derivative mode, with stages in
 // lanes and one by one, and in dual numbers (exact products) against differences of F.
+// The Riccati solver on the same problems: FD's converged inputs zero that F (Pontryagin's
+// costates, independent of the solver's local models); ID's converged accelerations keep every
+// passive torque at zero and their torques zero that F too (one problem, two formulations).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,6 +23,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/solver/riccati.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/errors.hpp"
 #include "support/problems.hpp"
@@ -211,6 +215,139 @@ INSTANTIATE_TEST_SUITE_P(Models, UnderActuation,
                                                               Formulation::kInverseDynamics),
                                             ::testing::Values(DerivativeMode::kMatrix, DerivativeMode::kAdjoint)),
                          case_name);
+
+
+// converged: one problem's optimum, whichever formulation the Riccati solver runs
+class RiccatiUnderActuation : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(RiccatiUnderActuation, BothFormulationsConvergeToTheOptimumOfTheOneProblem) {
+  const Problem p = problem_of(GetParam());
+  const Model& model = p.model;
+  const int n = model.n, N = 20;
+  const double T = 0.6;
+  std::mt19937 rng(5);
+  const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2), VecX<double>::Zero(n),
+                     random_vector(rng, n, 1e-2, 1e-1)};
+  const VecX<double> q_ref = random_vector(rng, n, -0.5, 0.5), d_hat = random_vector(rng, n, -0.3, 0.3);
+  const VecX<double> q0 = random_vector(rng, n, -0.5, 0.5), v0 = random_vector(rng, n, -0.5, 0.5);
+  const MatX<double> L = MatX<double>::Random(2 * n, 2 * n);
+  const MatX<double> P = L * L.transpose() + MatX<double>::Identity(2 * n, 2 * n);
+  RiccatiSettings settings;
+  settings.init_iterations = 300;
+  settings.init_tolerance = 1e-10;
+  for (const bool with_P : {false, true}) {
+    SCOPED_TRACE(with_P ? "terminal P" : "diagonal terminal weights");
+    std::vector<RiccatiSolver> solvers;
+    for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+      OcpProblem problem(model, f, DerivativeMode::kMatrix, w, q_ref, N);
+      problem.set_disturbance(d_hat);
+      if (with_P) problem.set_terminal_weight(P);
+      solvers.emplace_back(std::move(problem), T, 1e-3, settings);
+      EXPECT_LT(solvers.back().initialize(0.0, q0, v0), 1e-8) << to_string(f);
+    }
+    const RiccatiSolver& fd = solvers[0];
+    const RiccatiSolver& id = solvers[1];
+    ASSERT_EQ(fd.inputs().rows(), model.n_actuated());
+    ASSERT_EQ(id.inputs().rows(), n);
+    // C/GMRES's FD residual (no limits: the stage block is the input) at the actuated torques
+    // of each solution: both are stationary points of the one problem (the nonconvex problem
+    // may have several; from this start both formulations reach the same one without P)
+    Shooting shooting(fd.problem());
+    shooting.set_time(0.0);
+    const auto fd_residual = [&](const MatX<double>& torques) {
+      VecX<double> U(model.n_actuated() * N), F(model.n_actuated() * N);
+      for (int i = 0; i < N; ++i) {
+        for (int k = 0; k < model.n_actuated(); ++k) U[i * model.n_actuated() + k] = torques(model.actuated_joints[k], i);
+      }
+      shooting.residual(U, q0, v0, T, F);
+      return F.norm();
+    };
+    EXPECT_LT(fd_residual(fd.torques()), 1e-6);
+    EXPECT_LT(fd_residual(id.torques()), 1e-6);
+    // ID: the passive torques vanish along the horizon
+    for (int j : model.unactuated_joints) EXPECT_LT(id.torques().row(j).cwiseAbs().maxCoeff(), 1e-9);
+    if (!with_P) {
+      EXPECT_LT((id.torques() - fd.torques()).cwiseAbs().maxCoeff(), 1e-6 * (1 + fd.torques().cwiseAbs().maxCoeff()));
+      EXPECT_LT((id.states() - fd.states()).cwiseAbs().maxCoeff(), 1e-7);
+    }
+    EXPECT_LT((id.first_input() - id.inputs().col(0)).norm(), 1e-15);
+    for (int j : model.unactuated_joints) EXPECT_EQ(fd.first_input()[j], 0.0);
+    EXPECT_EQ(fd.feedback_gain().rows(), model.n_actuated());
+    EXPECT_EQ(id.feedback_gain().rows(), n);
+  }
+}
+
+// ID's elimination of the passive rows is exact: one Riccati step from a rolled-out start is
+// the solution of the stage QP written densely here (the local models' dynamics, Gauss–Newton
+// cost and the linearized constraints τ_E + τ_E,x dx + τ_E,u du = 0, by its KKT system)
+TEST_P(RiccatiUnderActuation, IdStepSolvesTheEqualityConstrainedQp) {
+  const Problem p = problem_of(GetParam());
+  const Model& model = p.model;
+  const int n = model.n, N = 3, ne = n - model.n_actuated(), nx = 2 * n;
+  const double T = 0.06, h = T / N;
+  std::mt19937 rng(9);
+  const OcpWeights w{random_vector(rng, n, 0.5, 2.0), random_vector(rng, n, 0.05, 0.2), random_vector(rng, n, 1e-3, 1e-2),
+                     random_vector(rng, n, 1e-2, 1e-1)};
+  const VecX<double> q0 = random_vector(rng, n, -0.5, 0.5), v0 = random_vector(rng, n, -0.5, 0.5);
+  OcpProblem problem(model, Formulation::kInverseDynamics, DerivativeMode::kMatrix, w, random_vector(rng, n, -0.5, 0.5), N);
+  RiccatiSettings settings;
+  settings.init_iterations = 0;  // the start is the rollout of zero accelerations
+  RiccatiSolver solver(problem, T, 1e-3, settings);
+  solver.initialize(0.0, q0, v0);
+  const MatX<double> X = solver.states(), U = solver.inputs();
+  ASSERT_GT(solver.torques().row(model.unactuated_joints[0]).cwiseAbs().maxCoeff(), 1e-3) << "a start off the constraint";
+  solver.iterate(0.0, q0, v0, false);
+  const MatX<double> dU = solver.inputs() - U, dX = solver.states() - X;
+
+  // unknowns z = (du_0, dx_1, du_1, …, dx_N), dx_0 = 0; equalities: dynamics, then constraints
+  const int nz = N * n + N * nx, neq = N * nx + N * ne;
+  MatX<double> H = MatX<double>::Zero(nz, nz), G = MatX<double>::Zero(neq, nz);
+  VecX<double> g = VecX<double>::Zero(nz), r = VecX<double>::Zero(neq);
+  const auto u_at = [&](int i) { return i * (n + nx); };
+  const auto x_at = [&](int i) { return i * (n + nx) - nx; };  // stage i ≥ 1
+  auto lm = solver.problem().make_local_model();
+  solver.problem().set_stage_times(0.0, h);
+  for (int i = 0; i < N; ++i) {
+    StageLocal st(n);
+    lm->local_model(solver.problem().terms(), i, h, X.col(i), U.col(i), st);
+    H.block(u_at(i), u_at(i), n, n) = st.L_uu;
+    g.segment(u_at(i), n) = st.l_u;
+    if (i > 0) {
+      H.block(x_at(i), x_at(i), nx, nx) = st.L_xx;
+      H.block(u_at(i), x_at(i), n, nx) = st.L_ux;
+      H.block(x_at(i), u_at(i), nx, n) = st.L_ux.transpose();
+      g.segment(x_at(i), nx) = st.l_x;
+      G.block(i * nx, x_at(i), nx, nx) = st.A;
+    }
+    // A dx_i + B du_i − dx_{i+1} = −b_i
+    G.block(i * nx, u_at(i), nx, n) = st.B;
+    G.block(i * nx, x_at(i + 1), nx, nx) = -MatX<double>::Identity(nx, nx);
+    r.segment(i * nx, nx) = -(st.x_next - X.col(i + 1));
+    for (int k = 0; k < ne; ++k) {
+      const int j = model.unactuated_joints[static_cast<size_t>(k)];
+      G.block(N * nx + i * ne + k, u_at(i), 1, n) = st.tau_u.row(j);
+      if (i > 0) G.block(N * nx + i * ne + k, x_at(i), 1, nx) = st.tau_x.row(j);
+      r[N * nx + i * ne + k] = -st.tau[j];
+    }
+  }
+  TerminalLocal term(n);
+  lm->terminal(solver.problem().terms(), N, X.col(N), term);
+  H.block(x_at(N), x_at(N), nx, nx) += term.L_xx;
+  g.segment(x_at(N), nx) += term.l_x;
+  MatX<double> K = MatX<double>::Zero(nz + neq, nz + neq);
+  K << H, G.transpose(), G, MatX<double>::Zero(neq, neq);
+  VecX<double> rhs(nz + neq);
+  rhs << -g, r;
+  const VecX<double> z = K.fullPivLu().solve(rhs);
+  // (the recursion's Q_uu carries a regularization of 1e-9 of its diagonal)
+  for (int i = 0; i < N; ++i) {
+    EXPECT_LT((dU.col(i) - z.segment(u_at(i), n)).norm(), 1e-7 * (1 + dU.norm())) << "stage " << i;
+    EXPECT_LT((dX.col(i + 1) - z.segment(x_at(i + 1), nx)).norm(), 1e-7 * (1 + dX.norm())) << "stage " << i + 1;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Models, RiccatiUnderActuation,
+                         ::testing::Values("acrobot", "pendubot", "cartpole", "passive_middle"));
 
 TEST(UnderActuationModel, ImportMarksThePassiveJointsAndThePlantLeavesThemAlone) {
   const Problem p = passive_middle();

@@ -4,21 +4,22 @@
 
 namespace idmpc {
 
-StageLocal::StageLocal(int n)
+StageLocal::StageLocal(int n, int nu)
     : x_next(VecX<double>::Zero(2 * n)),
       A(MatX<double>::Zero(2 * n, 2 * n)),
-      B(MatX<double>::Zero(2 * n, n)),
+      B(MatX<double>::Zero(2 * n, nu < 0 ? n : nu)),
       l_x(VecX<double>::Zero(2 * n)),
-      l_u(VecX<double>::Zero(n)),
+      l_u(VecX<double>::Zero(nu < 0 ? n : nu)),
       L_xx(MatX<double>::Zero(2 * n, 2 * n)),
-      L_uu(MatX<double>::Zero(n, n)),
-      L_ux(MatX<double>::Zero(n, 2 * n)),
+      L_uu(MatX<double>::Zero(nu < 0 ? n : nu, nu < 0 ? n : nu)),
+      L_ux(MatX<double>::Zero(nu < 0 ? n : nu, 2 * n)),
       tau(VecX<double>::Zero(n)),
       tau_x(MatX<double>::Zero(n, 2 * n)),
-      tau_u(MatX<double>::Zero(n, n)) {}
+      tau_u(MatX<double>::Zero(n, nu < 0 ? n : nu)) {}
 
-LocalModel::LocalModel(const StageTerms& terms)
+LocalModel::LocalModel(const StageTerms& terms, int nu)
     : n_(terms.n()),
+      nu_(nu),
       q_(Vec::Zero(n_)),
       v_(Vec::Zero(n_)),
       lq_(Vec::Zero(n_)),
@@ -28,7 +29,7 @@ LocalModel::LocalModel(const StageTerms& terms)
       W_(Vec::Zero(n_)) {}
 
 LocalModel::LocalModel(const LocalModel& o)
-    : n_(o.n_), frame_(o.frame_), q_(o.q_), v_(o.v_), lq_(o.lq_), lv_(o.lv_), hvv_(o.hvv_), g_(o.g_), W_(o.W_) {}
+    : n_(o.n_), nu_(o.nu_), frame_(o.frame_), q_(o.q_), v_(o.v_), lq_(o.lq_), lv_(o.lv_), hvv_(o.hvv_), g_(o.g_), W_(o.W_) {}
 
 double LocalModel::state_terms(const StageTerms& terms, int i, double scale, In x, Out l_x,
                                Eigen::Ref<MatX<double>> L_xx) {
@@ -59,27 +60,50 @@ void LocalModel::local_model(const StageTerms& terms, int i, double dtau, In x, 
 }
 
 void LocalModel::terminal(const StageTerms& terms, int stages, In x, TerminalLocal& out) {
-  out.cost = state_terms(terms, stages, 1.0, x, out.l_x, out.L_xx);
+  const MatX<double>& P = terms.terminal_weight();
+  if (P.size() == 0) {
+    out.cost = state_terms(terms, stages, 1.0, x, out.l_x, out.L_xx);
+    return;
+  }
+  // ½eᵀPe (with a frame target's term, if any, in value and gradient): its Hessian is P, the
+  // frame term's Gauss–Newton part left out (horizon_setup never sets both)
+  const int n = n_;
+  terms.state_gradient(stages, x.head(n), x.tail(n), lq_, lv_, frame_);
+  out.l_x.head(n) = lq_;
+  out.l_x.tail(n) = lv_;
+  out.L_xx = P;
+  out.cost = terms.terminal_cost(x.head(n), x.tail(n));
 }
 
-double LocalModel::terminal_cost(const StageTerms& terms, int stages, In x) {
-  return terms.stage_cost(stages, x.head(n_), x.tail(n_), terms.u_ref(stages));
+double LocalModel::terminal_cost(const StageTerms& terms, int /*stages*/, In x) {
+  return terms.terminal_cost(x.head(n_), x.tail(n_));
 }
 
 // --- forward dynamics -------------------------------------------------------------------------
 
 FdLocalModel::FdLocalModel(const StageTerms& terms)
-    : LocalModel(terms),
+    : LocalModel(terms, terms.model().n_actuated()),
       data_(terms.model(), DataParts::rnea() | DataParts::aba() | DataParts::rnea_derivatives() |
                                DataParts::minv_matrix() | DataParts::aba_derivatives()),
-      torque_(Vec::Zero(terms.n())) {}
+      torque_(Vec::Zero(terms.n())),
+      joints_(terms.model().actuated_joints) {}
+
+void FdLocalModel::scatter(In u, Out tau) const {
+  if (nu_ == n_) {
+    tau = u;
+    return;
+  }
+  tau.setZero();
+  for (int k = 0; k < nu_; ++k) tau[joints_[static_cast<size_t>(k)]] = u[k];
+}
 
 void FdLocalModel::linearize(const StageTerms& terms, int i, double dtau, In x, In u, StageLocal& out) {
   const int n = n_;
   const Model& model = terms.model();
   q_ = x.head(n);
   v_ = x.tail(n);
-  torque_ = u + terms.disturbance();
+  scatter(u, out.tau);
+  torque_ = out.tau + terms.disturbance();
   aba_derivatives(model, data_, q_, v_, torque_);
   out.x_next.head(n) = q_ + dtau * v_;
   out.x_next.tail(n) = v_ + dtau * data_.qdd;
@@ -88,37 +112,54 @@ void FdLocalModel::linearize(const StageTerms& terms, int i, double dtau, In x, 
   out.A.bottomLeftCorner(n, n) = dtau * data_.da_dq;
   out.A.bottomRightCorner(n, n) += dtau * data_.da_dv;
   out.B.topRows(n).setZero();
-  out.B.bottomRows(n) = dtau * data_.Minv;
+  out.tau_u.setZero();
+  if (nu_ == n) {
+    out.B.bottomRows(n) = dtau * data_.Minv;
+    out.tau_u.setIdentity();
+  } else {
+    for (int k = 0; k < nu_; ++k) {
+      const int j = joints_[static_cast<size_t>(k)];
+      out.B.bottomRows(n).col(k) = dtau * data_.Minv.col(j);
+      out.tau_u(j, k) = 1;
+    }
+  }
   out.cost = state_terms(terms, i, dtau, x, out.l_x, out.L_xx);
   out.l_u.setZero();
   out.L_uu.setZero();
   out.L_ux.setZero();
-  out.tau = u;
   out.tau_x.setZero();
-  out.tau_u.setIdentity();
 }
 
 void FdLocalModel::add_torque_terms(In W, In g, StageLocal& out) {
-  out.L_uu.diagonal() += W;
-  out.l_u += g;
+  // Sᵀ's rows: the input's joints' weights and gradients
+  if (nu_ == n_) {
+    out.L_uu.diagonal() += W;
+    out.l_u += g;
+    return;
+  }
+  for (int k = 0; k < nu_; ++k) {
+    const int j = joints_[static_cast<size_t>(k)];
+    out.L_uu(k, k) += W[j];
+    out.l_u[k] += g[j];
+  }
 }
 
 double FdLocalModel::evaluate(const StageTerms& terms, int i, double dtau, In x, In u, Out x_next, Out tau) {
   const int n = n_;
   q_ = x.head(n);
   v_ = x.tail(n);
-  torque_ = u + terms.disturbance();
+  scatter(u, tau);
+  torque_ = tau + terms.disturbance();
   aba(terms.model(), data_, q_, v_, torque_);
   x_next.head(n) = q_ + dtau * v_;
   x_next.tail(n) = v_ + dtau * data_.qdd;
-  tau = u;
-  return dtau * terms.stage_cost(i, q_, v_, u);
+  return dtau * terms.stage_cost(i, q_, v_, tau);
 }
 
 // --- inverse dynamics -------------------------------------------------------------------------
 
 IdLocalModel::IdLocalModel(const StageTerms& terms)
-    : LocalModel(terms),
+    : LocalModel(terms, terms.n()),
       data_(terms.model(), DataParts::rnea() | DataParts::rnea_derivatives()),
       a_(Vec::Zero(terms.n())),
       Wt_(MatX<double>::Zero(terms.n(), 3 * terms.n())) {}

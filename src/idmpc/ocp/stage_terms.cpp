@@ -250,6 +250,23 @@ double StageTerms::stage_cost(int i, In q, In v, In u) const {
                       frame_ ? Vec3<double>(p_ref_.col(i)) : Vec3<double>::Zero());
 }
 
+double StageTerms::terminal_cost(In q, In v) const {
+  const int i = N_;
+  if (terminal_P_.size() == 0) return stage_cost(i, q, v, u_ref_.col(i));
+  const int n = this->n();
+  double sum = 0;
+  for (int r = 0; r < 2 * n; ++r) {
+    const double er = r < n ? q[r] - q_ref_(r, i) : v[r - n] - v_ref_(r - n, i);
+    for (int c = 0; c < 2 * n; ++c) {
+      const double ec = c < n ? q[c] - q_ref_(c, i) : v[c - n] - v_ref_(c - n, i);
+      sum += er * terminal_P_(r, c) * ec;
+    }
+  }
+  // the frame term alone: the joint terms measured against the state itself vanish
+  const double frame = frame_ ? cost_against(q, v, u_ref_.col(i), q, v, u_ref_.col(i), Vec3<double>(p_ref_.col(i))) : 0.0;
+  return 0.5 * sum + frame;
+}
+
 StageTerms::CostScratch StageTerms::cost_scratch() const {
   const int n = this->n();
   return CostScratch{Vec::Zero(n), Vec::Zero(n), Vec::Zero(n), Vec::Zero(n), Data(*model_, DataParts::rnea()),

@@ -176,6 +176,9 @@ class StageTerms {
   /// ½(q − q_ref,i)ᵀQ_q(·) + ½(v − v_ref,i)ᵀQ_v(·) + ½(u − u_ref,i)ᵀR(·) + φ_frame(q) (cost.hpp).
   /// Allocation-free.
   double stage_cost(int i, In q, In v, In u) const;
+  /// @brief The terminal cost φ(x_N): stage N's cost at its torque reference, or with a terminal
+  /// weight ½eᵀPe plus the frame term, if any. Allocation-free.
+  double terminal_cost(In q, In v) const;
   /// @brief The same cost at the references of time t itself (a moving reference sampled at t,
   /// u_ref = ID(q_ref(t), 0, 0) − d̂), whatever stage times were set last: what a closed loop
   /// accumulates along its measured trajectory. Allocation-free, in the caller's `scratch`

@@ -60,17 +60,35 @@ void RiccatiSettings::validate() const {
 RiccatiSolver::RiccatiSolver(OcpProblem problem, double Tf, double dt, const RiccatiSettings& settings)
     : problem_(std::move(problem)), settings_(settings), Tf_(Tf), dt_(dt), hold_(problem_.model(), DataParts::rnea()) {
   settings_.validate();
-  if (problem_.model().under_actuated()) {
-    throw std::invalid_argument("the Riccati solver does not take under-actuated models yet (joint '" +
-                                problem_.model().joint_names[static_cast<size_t>(problem_.model().unactuated_joints[0])] +
-                                "' has no actuator): use the C/GMRES solver");
-  }
   if (!(Tf > 0) || !std::isfinite(Tf)) throw std::invalid_argument("horizon length Tf must be positive, got " + text(Tf));
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("sampling period dt must be positive, got " + text(dt));
   const int n = this->n(), N = this->N(), nx = 2 * n;
+  const Model& model = problem_.model();
+  nu_ = problem_.input_dim();
+  ne_ = problem_.equality_dim();
+  nw_ = nu_ - ne_;
+  eliminate_ = ne_ > 0;
+  passive_ = model.unactuated_joints;
+  actuated_ = model.actuated_joints;
   model_ = detail::LocalModelHolder(problem_.make_local_model());
-  stage_.assign(static_cast<size_t>(N), StageLocal(n));
+  stage_.assign(static_cast<size_t>(N), StageLocal(n, nu_));
   terminal_ = TerminalLocal(n);
+  if (eliminate_) {
+    reduced_.assign(static_cast<size_t>(N), StageLocal(n, nw_));
+    null_.assign(static_cast<size_t>(N), MatX<double>::Zero(n, nw_));
+    Yx_.assign(static_cast<size_t>(N), MatX<double>::Zero(n, nx));
+    y0_ = MatX<double>::Zero(n, N);
+    qp_defect_ = MatX<double>::Zero(nx, N);
+    Mee_ = MatX<double>::Zero(ne_, ne_);
+    Meu_ = MatX<double>::Zero(ne_, nw_);
+    Cx_ = MatX<double>::Zero(ne_, nx);
+    LZ_ = MatX<double>::Zero(n, nw_);
+    T1_ = MatX<double>::Zero(n, nx);
+    c_ = Vec::Zero(ne_);
+    nu_e_ = Vec::Zero(ne_);
+    llt_e_ = Eigen::LLT<MatX<double>>(ne_);
+  }
+  K0_ = MatX<double>::Zero(nu_, nx);
   const TorqueBounds& b = problem_.torque_bounds();
   const int m = b.m();
   joint_ = b.joints();
@@ -83,26 +101,30 @@ RiccatiSolver::RiccatiSolver(OcpProblem problem, double Tf, double dt, const Ric
     mu_[k] = settings_.barrier * dtau() * R[joint_[static_cast<size_t>(k)]] * half * half;
   }
   for (MatX<double>* x : {&X_, &dX_, &Xt_}) *x = MatX<double>::Zero(nx, N + 1);
-  for (MatX<double>* x : {&U_, &T_, &dU_, &Ut_, &k_}) *x = MatX<double>::Zero(n, N);
+  T_ = MatX<double>::Zero(n, N);
+  for (MatX<double>* x : {&U_, &dU_, &Ut_}) *x = MatX<double>::Zero(nu_, N);
+  k_ = MatX<double>::Zero(nw_, N);
   for (MatX<double>* x : {&S_, &Z_, &dS_, &dZ_, &St_}) *x = MatX<double>::Zero(2 * m, N);
   p_ = MatX<double>::Zero(nx, N + 1);
   defect_ = MatX<double>::Zero(nx, N);
   P_.assign(static_cast<size_t>(N + 1), MatX<double>::Zero(nx, nx));
-  K_.assign(static_cast<size_t>(N), MatX<double>::Zero(n, nx));
-  llt_.assign(static_cast<size_t>(N), Eigen::LLT<MatX<double>>(n));
+  K_.assign(static_cast<size_t>(N), MatX<double>::Zero(nw_, nx));
+  llt_.assign(static_cast<size_t>(N), Eigen::LLT<MatX<double>>(nw_));
   PA_ = MatX<double>::Zero(nx, nx);
-  PB_ = MatX<double>::Zero(nx, n);
+  PB_ = MatX<double>::Zero(nx, nw_);
   Qxx_ = MatX<double>::Zero(nx, nx);
-  Quu_ = MatX<double>::Zero(n, n);
-  Qux_ = MatX<double>::Zero(n, nx);
+  Quu_ = MatX<double>::Zero(nw_, nw_);
+  Qux_ = MatX<double>::Zero(nw_, nx);
   for (Vec* x : {&pb_, &qx_, &lmd_, &lmd_next_, &xn_}) *x = Vec::Zero(nx);
-  for (Vec* x : {&qu_, &W_, &g_, &Fi_, &tau_, &u0_, &dtorque_}) *x = Vec::Zero(n);
+  for (Vec* x : {&qu_, &Fi_}) *x = Vec::Zero(nw_);
+  gu_ = Vec::Zero(nu_);
+  for (Vec* x : {&W_, &g_, &tau_, &u0_, &dtorque_}) *x = Vec::Zero(n);
   regularization_ = settings_.regularization;
 }
 
 void RiccatiSolver::set_inputs(const MatX<double>& U) {
-  if (U.rows() != n() || U.cols() != N() || !U.allFinite()) {
-    throw std::invalid_argument("riccati: the inputs must be a finite " + std::to_string(n()) + " x " +
+  if (U.rows() != nu_ || U.cols() != N() || !U.allFinite()) {
+    throw std::invalid_argument("riccati: the inputs must be a finite " + std::to_string(nu_) + " x " +
                                 std::to_string(N()) + " matrix");
   }
   U_ = U;
@@ -131,39 +153,110 @@ void RiccatiSolver::linearize(double t) {
     }
     model_->add_torque_terms(W_, g_, st);
     defect_.col(i) = st.x_next - X_.col(i + 1);
+    if (eliminate_) eliminate(i);
   }
   model_->terminal(terms, N, X_.col(N), terminal_);
   evaluations_ += 1;
   // KKT residual: the reduced gradient of the (barrier) objective in the inputs along the
-  // costates λ_N = ∇φ, λ_i = ℓ_x + Aᵀλ_{i+1} (divided by Δτ: C/GMRES's F), and the defects
+  // costates λ_N = ∇φ, λ_i = ℓ_x + Aᵀλ_{i+1} (divided by Δτ: C/GMRES's F), and the defects;
+  // ID under-actuated: the gradient on the constraint's null space (Zᵀ, and Y_xᵀ in λ), the
+  // multipliers ν = −M_EE⁻¹(ℓ_u + Bᵀλ)_E and the constraints' residuals c
   double sum = defect_.squaredNorm();
+  nu_max_ = 0;
   lmd_ = terminal_.l_x;
   for (int i = N - 1; i >= 0; --i) {
     const StageLocal& st = stage_[static_cast<size_t>(i)];
-    Fi_ = st.l_u;
-    Fi_.noalias() += st.B.transpose() * lmd_;
-    sum += Fi_.squaredNorm() / (h * h);
+    gu_ = st.l_u;
+    gu_.noalias() += st.B.transpose() * lmd_;
     lmd_next_ = st.l_x;
     lmd_next_.noalias() += st.A.transpose() * lmd_;
+    if (eliminate_) {
+      Fi_.noalias() = null_[static_cast<size_t>(i)].transpose() * gu_;
+      lmd_next_.noalias() += Yx_[static_cast<size_t>(i)].transpose() * gu_;
+      for (int k = 0; k < ne_; ++k) {
+        const int j = passive_[static_cast<size_t>(k)];
+        sum += st.tau[j] * st.tau[j];
+        nu_e_[k] = -gu_[j];
+        for (int l = 0; l < ne_; ++l) Mee_(k, l) = st.tau_u(j, passive_[static_cast<size_t>(l)]);
+      }
+      llt_e_.compute(Mee_);
+      llt_e_.solveInPlace(nu_e_);
+      nu_max_ = std::max(nu_max_, nu_e_.cwiseAbs().maxCoeff());
+    } else {
+      Fi_ = gu_;
+    }
+    sum += Fi_.squaredNorm() / (h * h);
     lmd_.swap(lmd_next_);
   }
   kkt_ = std::sqrt(sum);
 }
 
+void RiccatiSolver::eliminate(int i) {
+  const StageLocal& st = stage_[static_cast<size_t>(i)];
+  StageLocal& r = reduced_[static_cast<size_t>(i)];
+  MatX<double>& Z = null_[static_cast<size_t>(i)];
+  MatX<double>& Yx = Yx_[static_cast<size_t>(i)];
+  auto y0 = y0_.col(i);
+  // the passive rows of the torque: c, C_x and τ_u = M split into M_EE, M_EU
+  for (int k = 0; k < ne_; ++k) {
+    const int j = passive_[static_cast<size_t>(k)];
+    c_[k] = st.tau[j];
+    Cx_.row(k) = st.tau_x.row(j);
+    for (int l = 0; l < ne_; ++l) Mee_(k, l) = st.tau_u(j, passive_[static_cast<size_t>(l)]);
+    for (int l = 0; l < nw_; ++l) Meu_(k, l) = st.tau_u(j, actuated_[static_cast<size_t>(l)]);
+  }
+  llt_e_.compute(Mee_);  // a principal block of the mass matrix: positive definite
+  llt_e_.solveInPlace(Meu_);
+  llt_e_.solveInPlace(Cx_);
+  llt_e_.solveInPlace(c_);
+  Z.setZero();
+  Yx.setZero();
+  y0.setZero();
+  for (int l = 0; l < nw_; ++l) Z(actuated_[static_cast<size_t>(l)], l) = 1;
+  for (int k = 0; k < ne_; ++k) {
+    const int j = passive_[static_cast<size_t>(k)];
+    Z.row(j) = -Meu_.row(k);
+    Yx.row(j) = -Cx_.row(k);
+    y0[j] = -c_[k];
+  }
+  // the stage in (dx, dw): da = Z dw + Y_x dx + y_0
+  r.A = st.A;
+  r.A.noalias() += st.B * Yx;
+  r.B.noalias() = st.B * Z;
+  qp_defect_.col(i) = defect_.col(i);
+  qp_defect_.col(i).noalias() += st.B * y0;
+  LZ_.noalias() = st.L_uu * Z;
+  T1_ = st.L_ux;
+  T1_.noalias() += st.L_uu * Yx;  // L_ux + L_uu Y_x
+  r.L_uu.noalias() = Z.transpose() * LZ_;
+  r.L_ux.noalias() = Z.transpose() * T1_;
+  r.L_xx = st.L_xx;
+  r.L_xx.noalias() += Yx.transpose() * st.L_ux;
+  r.L_xx.noalias() += T1_.transpose() * Yx;
+  gu_ = st.l_u;
+  gu_.noalias() += st.L_uu * y0;
+  r.l_u.noalias() = Z.transpose() * gu_;
+  r.l_x = st.l_x;
+  r.l_x.noalias() += Yx.transpose() * st.l_u;
+  r.l_x.noalias() += T1_.transpose() * y0;
+}
+
 bool RiccatiSolver::backward(double eps) {
   const int n = this->n(), N = this->N();
   const double h = dtau();
-  const bool linear = model_->linear_dynamics();
+  // ID's constant A, B; with the constraint eliminated its A and B are those of a general stage
+  const bool linear = model_->linear_dynamics() && !eliminate_;
+  const MatX<double>& defect = eliminate_ ? qp_defect_ : defect_;
   P_[static_cast<size_t>(N)] = terminal_.L_xx;
   p_.col(N) = terminal_.l_x;
   for (int i = N - 1; i >= 0; --i) {
-    const StageLocal& st = stage_[static_cast<size_t>(i)];
+    const StageLocal& st = qp(i);
     const MatX<double>& P = P_[static_cast<size_t>(i + 1)];
     // A = [I, ΔτI; A_q, A_v], B = [0; B_v]: the Euler step's upper rows are the same in every
-    // formulation; ID's lower rows are (0, I) and ΔτI
+    // formulation (and after the elimination); ID's lower rows are (0, I) and ΔτI
     const auto Pq = P.leftCols(n), Pv = P.rightCols(n);
     pb_ = p_.col(i + 1);
-    pb_.noalias() += P * defect_.col(i);
+    pb_.noalias() += P * defect.col(i);
     if (linear) {
       PA_.leftCols(n) = Pq;
       PA_.rightCols(n) = h * Pq + Pv;
@@ -233,8 +326,17 @@ void RiccatiSolver::forward() {
   for (int i = 0; i < N; ++i) {
     const StageLocal& st = stage_[static_cast<size_t>(i)];
     const auto dq = dX_.col(i).head(n), dv = dX_.col(i).tail(n);
-    dU_.col(i) = k_.col(i);
-    dU_.col(i).noalias() += K_[static_cast<size_t>(i)] * dX_.col(i);
+    if (eliminate_) {
+      // dw = k + K dx, then da = Z dw + Y_x dx + y_0
+      Fi_ = k_.col(i);
+      Fi_.noalias() += K_[static_cast<size_t>(i)] * dX_.col(i);
+      dU_.col(i) = y0_.col(i);
+      dU_.col(i).noalias() += null_[static_cast<size_t>(i)] * Fi_;
+      dU_.col(i).noalias() += Yx_[static_cast<size_t>(i)] * dX_.col(i);
+    } else {
+      dU_.col(i) = k_.col(i);
+      dU_.col(i).noalias() += K_[static_cast<size_t>(i)] * dX_.col(i);
+    }
     auto next = dX_.col(i + 1);
     next.head(n) = dq + h * dv + defect_.col(i).head(n);
     if (linear) {
@@ -246,7 +348,7 @@ void RiccatiSolver::forward() {
     }
     if (m == 0) continue;
     // the torque's change, then the slacks' and multipliers' steps
-    if (input_torque) {
+    if (input_torque && nu_ == n) {
       dtorque_ = dU_.col(i);
     } else {
       dtorque_.noalias() = st.tau_x * dX_.col(i);
@@ -294,6 +396,9 @@ double RiccatiSolver::merit(double alpha, double nu) {
   for (int i = 0; i < N; ++i) {
     total += model_->evaluate(terms, i, h, Xt_.col(i), Ut_.col(i), xn_, tau_);
     total += nu * (xn_ - Xt_.col(i + 1)).lpNorm<1>();
+    if (eliminate_) {
+      for (int j : passive_) total += nu * std::abs(tau_[j]);  // ID's passive torques: constraints
+    }
     for (int k = 0; k < m; ++k) {
       const int j = joint_[static_cast<size_t>(k)];
       const double s_up = St_(k, i), s_lo = St_(m + k, i);
@@ -332,7 +437,7 @@ double RiccatiSolver::iterate(double t, In q, In v, bool search) {
   const double alpha_max = max_step(S_, dS_), alpha_dual = max_step(Z_, dZ_);
   double alpha = alpha_max;
   if (search) {
-    const double nu = 1 + std::max(p_.cwiseAbs().maxCoeff(), Z_.size() ? Z_.maxCoeff() : 0.0);
+    const double nu = 1 + std::max({p_.cwiseAbs().maxCoeff(), Z_.size() ? Z_.maxCoeff() : 0.0, nu_max_});
     const double m0 = merit(0, nu);
     int halvings = 0;
     while (!(merit(alpha, nu) < m0) && halvings < kLineSearchHalvings) {
@@ -344,7 +449,13 @@ double RiccatiSolver::iterate(double t, In q, In v, bool search) {
   }
   take_step(alpha, alpha_dual);
   regularization_ = std::max(settings_.regularization, eps / 10);
-  u0_ = U_.col(0);
+  set_first_input();
+  if (eliminate_) {
+    K0_ = Yx_.front();
+    K0_.noalias() += null_.front() * K_.front();
+  } else {
+    K0_ = K_.front();
+  }
   ++iterations_;
   if (timing_) {
     times_.rollout += std::chrono::duration<double>(t1 - t0).count();
@@ -385,9 +496,10 @@ double RiccatiSolver::initialize(double t, In q, In v) {
   // the start: every stage holds the measured state (FD: the torque that holds q at rest; ID:
   // zero acceleration), the trajectory rolled out from there
   if (problem_.formulation() == Formulation::kForwardDynamics) {
+    // (under-actuated: the actuated joints' share of it)
     const Vec zero = Vec::Zero(n);
     const Vec hold = rnea(problem_.model(), hold_, Vec(q), zero, zero) - problem_.disturbance();
-    U_ = hold.replicate(1, N());
+    for (int k = 0; k < nu_; ++k) U_.row(k).setConstant(hold[nu_ == n ? k : actuated_[static_cast<size_t>(k)]]);
   } else {
     U_.setZero();
   }
@@ -401,9 +513,10 @@ double RiccatiSolver::initialize(double t, In q, In v) {
     if (!check_finite()) throw std::runtime_error("riccati start: " + failure_);
     if (kkt < settings_.init_tolerance) break;
   }
+  if (!rolled_out_) rollout_and_slacks(t);  // (no iteration: the guess's rollout)
   linearize(t);  // the residual where the start ended
   if (!check_finite()) throw std::runtime_error("riccati start: " + failure_);
-  u0_ = U_.col(0);
+  set_first_input();
   violation_ = violation();
   times_.total = seconds_since(t0);
   return kkt_;
@@ -437,6 +550,15 @@ bool RiccatiSolver::update(double t, In q, In v) {
   kkt_ = kkt_first_;
   times_.total = seconds_since(t0);
   return true;
+}
+
+void RiccatiSolver::set_first_input() {
+  if (nu_ == n()) {
+    u0_ = U_.col(0);
+    return;
+  }
+  u0_.setZero();
+  for (int k = 0; k < nu_; ++k) u0_[actuated_[static_cast<size_t>(k)]] = U_(k, 0);
 }
 
 double RiccatiSolver::violation() const {

@@ -18,6 +18,19 @@
 /// stage, so a limit costs one more weight on τ in the stage's Hessian, W = ΔτR + z/s, and
 /// the Riccati recursion is unchanged; steps keep s, z > 0 (fraction to the boundary).
 ///
+/// Under-actuation. FD's input is the n_u actuators' torques (τ = Sᵀu), and nothing else changes.
+/// ID keeps the n accelerations as its input, with the passive joints' torques τ_E(x, a) = 0 as
+/// each stage's equality constraint. The solver eliminates it stage by stage in the QP: with
+/// M_EE, M_EU the passive rows of τ_u = M, the linearized constraint
+/// c + C_x dx + M_EU da_U + M_EE da_E = 0 gives da_E from (dx, da_U), so
+///   da = Z dw + Y_x dx + y_0,  Z = [I; −M_EE⁻¹M_EU],  Y_x = [0; −M_EE⁻¹C_x],  y_0 = [0; −M_EE⁻¹c],
+/// with the actuated accelerations w = a_U (n_u) as the recursion's input: the stage's A, B,
+/// cost and defect are rewritten in (dx, dw) and the recursion runs unchanged on them (the
+/// null-space method of constrained Riccati recursions, with the null space of the actuated
+/// coordinates). The step satisfies the linearized constraint; the residual c left by its
+/// curvature is in the KKT residual and, weighted by its multiplier ν = −M_EE⁻¹(ℓ_u + Bᵀλ)_E,
+/// in the merit, like a defect.
+///
 /// Real-time iteration (RiccatiSettings::iterations = 1, the default): the previous solution
 /// shifted by Δt along the stages is the start of one full step per update. Converged mode
 /// (iterations > 1, tolerance > 0): iterations with a backtracking line search on the ℓ1 merit
@@ -93,16 +106,17 @@ class RiccatiSolver final : public MpcSolver {
   const RiccatiSettings& settings() const { return settings_; }
   double horizon() const { return Tf_; }
   /// @brief The current trajectory: states 2n × (N+1) (column 0 the last measured state), inputs
-  /// n × N, and each stage's torque τ (n × N).
+  /// (OcpProblem::input_dim) × N, and each stage's joint torques τ (n × N).
   const MatX<double>& states() const { return X_; }
   const MatX<double>& inputs() const { return U_; }
   const MatX<double>& torques() const { return T_; }
   /// @brief SQP iterations of the last update (or of the start).
   int iterations() const { return iterations_; }
-  /// @brief The stage Riccati gain K_0 (n × 2n) of the last iteration: du_0 = K_0 dx_0.
-  const MatX<double>& feedback_gain() const { return K_.front(); }
-  /// @brief Warm start: the inputs U (n × N); the states follow by a rollout from x_0 at the next
-  /// update or start.
+  /// @brief The stage-0 gain of the last iteration in the input's coordinates, du_0 = K_0 dx_0
+  /// (input_dim × 2n; ID under-actuated: the passive accelerations' part included).
+  const MatX<double>& feedback_gain() const { return K0_; }
+  /// @brief Warm start: the inputs U (input_dim × N); the states follow by a rollout from x_0 at
+  /// the next update or start.
   void set_inputs(const MatX<double>& U);
 
   /// @brief One SQP iteration at time t from the measured x = (q, v), with or without a line
@@ -112,6 +126,12 @@ class RiccatiSolver final : public MpcSolver {
  private:
   int n() const { return problem_.n(); }
   int N() const { return problem_.N(); }
+  // stage i's QP as the recursion reads it (ID under-actuated: with the constraint eliminated)
+  const StageLocal& qp(int i) const { return eliminate_ ? reduced_[static_cast<size_t>(i)] : stage_[static_cast<size_t>(i)]; }
+  // ID under-actuated: stage i's null-space basis Z, Y_x, y_0 and its rewritten QP (see above)
+  void eliminate(int i);
+  // stage 0's input as joint values (FD under-actuated: zero on the passive joints)
+  void set_first_input();
   double dtau() const { return Tf_ / N(); }
   // every stage's local model at the current trajectory, limits condensed, and the KKT residual
   void linearize(double t);
@@ -138,6 +158,17 @@ class RiccatiSolver final : public MpcSolver {
   detail::LocalModelHolder model_;
   std::vector<StageLocal> stage_;
   TerminalLocal terminal_;
+  // inputs: nu_ rows in U_, nw_ in the recursion (ID under-actuated: the actuated accelerations)
+  int nu_ = 0, nw_ = 0, ne_ = 0;
+  bool eliminate_ = false;
+  std::vector<int> passive_, actuated_;
+  std::vector<StageLocal> reduced_;
+  std::vector<MatX<double>> null_, Yx_;  ///< Z (n × n_u), Y_x (n × 2n) per stage
+  MatX<double> y0_, qp_defect_;          ///< y_0 (n × N); the defects B y_0 + b (2n × N)
+  MatX<double> Mee_, Meu_, Cx_, LZ_, T1_, K0_;
+  Vec c_, nu_e_;
+  Eigen::LLT<MatX<double>> llt_e_;
+  double nu_max_ = 0;  ///< the largest |ν| of the last linearization
   // bounded joints: joint index, lower and upper torque, barrier weight μ per stage
   std::vector<int> joint_;
   Vec lower_, upper_, mu_;
@@ -150,7 +181,7 @@ class RiccatiSolver final : public MpcSolver {
   MatX<double> k_, p_, defect_;
   std::vector<Eigen::LLT<MatX<double>>> llt_;
   MatX<double> PA_, PB_, Qxx_, Quu_, Qux_;
-  Vec pb_, qx_, qu_, W_, g_, lmd_, lmd_next_, Fi_, xn_, tau_, dtorque_;
+  Vec pb_, qx_, qu_, W_, g_, lmd_, lmd_next_, Fi_, gu_, xn_, tau_, dtorque_;
   Vec u0_;
   Data hold_;              ///< RNEA of the start's holding torque
   bool rolled_out_ = false;  ///< whether the states are a trajectory of the inputs (else: roll out first)
