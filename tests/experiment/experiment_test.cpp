@@ -60,6 +60,20 @@ TEST(PaperTask, IsTheDesignsSetup) {
   EXPECT_DOUBLE_EQ(t.Qa_fallback, 1e-4);
 }
 
+// a divergence's hint names what applies to the solver that diverged
+TEST(PaperTask, DivergenceHintsNameTheSolversOwnSettings) {
+  Task t = paper_task();
+  const std::string cgmres = divergence_hint(t);
+  EXPECT_NE(cgmres.find("--zeta"), std::string::npos) << cgmres;
+  EXPECT_EQ(cgmres.find("--iterations"), std::string::npos) << cgmres;
+  t.solver = "riccati";
+  const std::string riccati = divergence_hint(t);
+  EXPECT_NE(riccati.find("--iterations 3"), std::string::npos) << riccati;
+  EXPECT_NE(riccati.find("line_search"), std::string::npos) << riccati;
+  EXPECT_EQ(riccati.find("--zeta"), std::string::npos) << riccati;
+  EXPECT_EQ(riccati.find("--alpha"), std::string::npos) << riccati;
+}
+
 TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
   TempDir dir;
   const std::string path = dir.write("mine.json", R"({

@@ -238,6 +238,17 @@ TEST(HorizonSetup, UnderActuatedTerminalCostIsTheLqrValueOfTheTarget) {
   EXPECT_LE(residual.cwiseAbs().maxCoeff(), 1e-6 * P.cwiseAbs().maxCoeff()) << residual;
   EXPECT_GT(Eigen::SelfAdjointEigenSolver<MatX<double>>(P).eigenvalues().minCoeff(), 0);
 
+  // a start near the target keeps it; a swing-up's start (the pole hanging) does not
+  s.q_start = VecX<double>::Zero(n);
+  s.q_start[1] = 0.7;
+  EXPECT_EQ(setup_horizon(model, s).terminal_weight.size(), 4 * n * n);
+  s.q_start[1] = 3.14;
+  const HorizonSetup swing = setup_horizon(model, s);
+  EXPECT_EQ(swing.terminal_weight.size(), 0);
+  EXPECT_TRUE(std::any_of(swing.notes.begin(), swing.notes.end(),
+                          [](const std::string& s) { return s.find("linearization's reach") != std::string::npos; }));
+  s.q_start.resize(0);
+
   // off an equilibrium (the pole tilted: the hinge would need a torque) and fully actuated: none
   s.q_ref[1] = 0.3;
   const HorizonSetup tilted = setup_horizon(model, s);

@@ -561,14 +561,21 @@ std::string divergence_hint(const Task& t, double damping_step_ratio) {
     tries.push_back("--Qa " + text(Qa) + " (a small weight on the accelerations, the paper's fallback" +
                     std::string(t.Qa_fallback > 0 ? "; `swingup --fallback` reruns with it" : "") + ")");
   }
-  if (t.alpha > 0 && !t.init_full_horizon) {
+  const bool riccati = t.solver == "riccati";
+  if (riccati) {
+    tries.push_back("--iterations " + std::to_string(std::max(3, 2 * t.riccati.iterations)) +
+                    " (more SQP iterations per update" +
+                    std::string(t.riccati.line_search ? ")" : ", with \"riccati\": {\"line_search\": true} in the task)"));
+  } else if (t.alpha > 0 && !t.init_full_horizon) {
     tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
                     "growing the horizon from zero)");
   }
   tries.push_back("a larger --R (now " + (t.R.empty() ? std::string("auto") : text(t.R.front())) +
                   ") for smaller, smoother torques");
-  const double zeta = t.zeta > 0 ? t.zeta : 1.0 / t.dt;
-  tries.push_back("a smaller --zeta (now " + text(zeta) + ")");
+  if (!riccati) {
+    const double zeta = t.zeta > 0 ? t.zeta : 1.0 / t.dt;
+    tries.push_back("a smaller --zeta (now " + text(zeta) + ")");
+  }
   tries.push_back("a larger --N (now " + std::to_string(t.N) + ") for finer horizon steps");
   std::string s = "try ";
   for (size_t k = 0; k < tries.size(); ++k) s += (k ? "; or " : "") + tries[k];

@@ -23,6 +23,9 @@ constexpr double kAutoPostureQq = 1, kAutoPostureQv = 1;
 constexpr double kAutoAcceleration = 20;
 // the fastest closed-loop motion the horizon step Δτ resolves: ω·Δτ ≤ this
 constexpr double kAutoStepFraction = 0.35;
+// an under-actuated start farther than this from its target [rad or m, any joint] is a
+// swing-up, outside the reach of the target's linearization (sin θ ≈ θ within 10 %)
+constexpr double kLqrReach = 0.7853981633974483;
 
 std::string text(double x) {
   std::ostringstream o;
@@ -159,6 +162,13 @@ MatX<double> terminal_lqr(const Model& model, const ControllerSettings& s, const
     // a growing horizon: its step is not the one P is for, and a swing-up starts far from the
     // target, where the target's LQR value means nothing
     notes.push_back("under-actuated with a growing horizon (alpha > 0): the terminal cost keeps its diagonal weights");
+    return {};
+  }
+  if (s.q_start.size() == n && (s.q_start - s.q_ref).cwiseAbs().maxCoeff() > kLqrReach) {
+    // a swing-up: the target's linearization means nothing at the start, and its value would
+    // rank the states of the swing wrongly
+    notes.push_back("under-actuated, starting " + text((s.q_start - s.q_ref).cwiseAbs().maxCoeff()) +
+                    " rad from the target (beyond the linearization's reach pi/4): the terminal cost keeps its diagonal weights");
     return {};
   }
   Data data(model);

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <cstdio>
+#include <cstdlib>
 
 #include "idmpc/dynamics/dynamics.hpp"
 #include "idmpc/dynamics/rnea.hpp"
@@ -448,6 +450,7 @@ double RiccatiSolver::iterate(double t, In q, In v, bool search) {
     if (halvings == kLineSearchHalvings) eps *= 10;
   }
   take_step(alpha, alpha_dual);
+  if (std::getenv("RDBG")) std::fprintf(stderr, "t %.3f kkt %.3g alpha %.3g ad %.3g eps %.2g |dU| %.3g |U| %.3g maxZ %.3g minS %.3g numax %.3g maxc %.3g |dX| %.3g\n", t, kkt, alpha, alpha_dual, eps, dU_.cwiseAbs().maxCoeff(), U_.cwiseAbs().maxCoeff(), Z_.size()?Z_.maxCoeff():0.0, S_.size()?S_.minCoeff():0.0, nu_max_, T_.row(1).cwiseAbs().maxCoeff(), dX_.cwiseAbs().maxCoeff());
   regularization_ = std::max(settings_.regularization, eps / 10);
   set_first_input();
   if (eliminate_) {
