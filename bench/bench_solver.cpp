@@ -29,6 +29,10 @@
 // BM_Riccati/<fd|id>/n:<n>/N:<N>: one update of the Riccati solver (one real-time Gauss–Newton
 //   iteration: docs/solvers.md), replayed on the states of its own closed-loop swing-up as above,
 //   on Table 3's sizes and the horizon scaling (n ∈ {4,16}, N ∈ {10 … 100}).
+// BM_UnderActuatedRiccati/<fd|id>/<acrobot|pendubot|cartpole>: one Riccati update on the shipped
+//   swing-up task of that model (mjcf/<model>_swingup.json under the Riccati solver: FD's input the
+//   actuator's torque, ID's the accelerations with the passive torque eliminated), replayed on
+//   the states of its own 0.3 s closed loop.
 
 #include <chrono>
 #include <cmath>
@@ -423,6 +427,19 @@ void BM_UnderActuated(benchmark::State& state, Formulation formulation, int kmax
   state.counters["states"] = static_cast<double>(f.t.size());
 }
 
+// the next recorded update of a Riccati fixture; returns its evaluations
+int replay_riccati(RiccatiFixture& fx) {
+  if (fx.next == fx.t.size()) {
+    fx.solver = fx.start;
+    fx.next = 0;
+  }
+  const size_t k = fx.next++;
+  const bool ok = fx.solver->update(fx.t[k], fx.q[k], fx.v[k]);
+  benchmark::DoNotOptimize(ok);
+  benchmark::DoNotOptimize(fx.solver->first_input().data());
+  return fx.solver->evaluations();
+}
+
 void BM_Riccati(benchmark::State& state, Formulation f, int n, int N) {
   RiccatiFixture& fx = riccati_fixture(f, n, N);
   if (fx.t.empty()) {
@@ -430,17 +447,7 @@ void BM_Riccati(benchmark::State& state, Formulation f, int n, int N) {
     return;
   }
   long evaluations = 0;
-  for (auto _ : state) {
-    if (fx.next == fx.t.size()) {
-      fx.solver = fx.start;
-      fx.next = 0;
-    }
-    const size_t k = fx.next++;
-    const bool ok = fx.solver->update(fx.t[k], fx.q[k], fx.v[k]);
-    benchmark::DoNotOptimize(ok);
-    benchmark::DoNotOptimize(fx.solver->first_input().data());
-    evaluations += fx.solver->evaluations();
-  }
+  for (auto _ : state) evaluations += replay_riccati(fx);
   state.counters["n"] = n;
   state.counters["N"] = N;
   state.counters["diverged"] = fx.diverged ? 1 : 0;
@@ -449,6 +456,46 @@ void BM_Riccati(benchmark::State& state, Formulation f, int n, int N) {
   // per stage [us]
   state.counters["us_per_stage"] = benchmark::Counter(
       1e-6 * N, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+const char* const kUnderActuatedTasks[] = {"acrobot", "pendubot", "cartpole"};
+
+void BM_UnderActuatedRiccati(benchmark::State& state, Formulation formulation, int task_index) {
+  static std::unique_ptr<RiccatiFixture> current;  // one case at a time
+  const auto key = std::make_tuple(static_cast<int>(formulation), task_index, -1);
+  if (!current || current->key != key) {
+    current = std::make_unique<RiccatiFixture>();
+    RiccatiFixture& fx = *current;
+    fx.key = key;
+    Task task = load_task(shipped_mjcf_path(std::string(kUnderActuatedTasks[task_index]) + "_swingup.json"));
+    task.solver = "riccati";
+    task.formulation = to_string(formulation);
+    task.duration = kRecordSeconds;
+    mj::TaskRun run(task);
+    mj::ClosedLoopSettings loop = run.loop_settings();
+    loop.phase_timing = false;
+    const mj::RunResult result = run.run(loop, [&](const mj::StepRecord& r) {
+      fx.t.push_back(r.t);
+      fx.q.push_back(r.q);
+      fx.v.push_back(r.v);
+    });
+    const size_t ok = result.update_ms.size();
+    fx.t.resize(ok);
+    fx.q.resize(ok);
+    fx.v.resize(ok);
+    fx.diverged = result.diverged;
+    run.controller().initialize(run.q0(), VecX<double>::Zero(run.n()));
+    fx.start.emplace(dynamic_cast<const RiccatiSolver&>(run.controller().solver()));
+    fx.solver = fx.start;
+  }
+  RiccatiFixture& fx = *current;
+  if (fx.t.empty()) {
+    state.SkipWithError("the swing-up diverged before its first update");
+    return;
+  }
+  for (auto _ : state) replay_riccati(fx);
+  state.counters["inputs"] = fx.solver->problem().input_dim();
+  state.counters["states"] = static_cast<double>(fx.t.size());
 }
 
 void register_all() {
@@ -505,6 +552,14 @@ void register_all() {
       benchmark::RegisterBenchmark(
           ("BM_UnderActuated/" + to_string(f) + "/cartpole/kmax:" + std::to_string(kmax)).c_str(), BM_UnderActuated,
           f, kmax)
+          ->Unit(benchmark::kMicrosecond);
+    }
+  }
+  for (int task = 0; task < 3; ++task) {
+    for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+      benchmark::RegisterBenchmark(
+          ("BM_UnderActuatedRiccati/" + to_string(f) + "/" + kUnderActuatedTasks[task]).c_str(),
+          BM_UnderActuatedRiccati, f, task)
           ->Unit(benchmark::kMicrosecond);
     }
   }

@@ -2,7 +2,7 @@
 """Writes the main job's Markdown report from the swing-up summaries and logs.
 
 Usage: report.py RESULTS_DIR  (reads swingup_{fd,id}_{matrix_paper,matrix,adjoint,riccati}.{json,csv},
-cartpole_{fd,id}.json;
+cartpole_{fd,id}.json, acrobot_{fd,id}.json;
 writes report.md)
 """
 import json
@@ -69,6 +69,7 @@ def main():
     runs = {(f, d): summary(f"swingup_{f}_{d}") for f in ("fd", "id") for d, _ in VARIANTS}
     riccati = {f: summary(f"swingup_{f}_riccati") for f in ("fd", "id")}
     cartpole = {f: summary(f"cartpole_{f}") for f in ("fd", "id")}
+    acrobot = {f: summary(f"acrobot_{f}") for f in ("fd", "id")}
     lines = ["# idmpc: the paper's swing-up (4-link arm, N = 25, kmax = 10, 10 s)", ""]
     lines += [f"Machine: {cpu_model()}, {os.cpu_count()} cores; {compiler()}; Release build "
               "(`-O3`, `-march=native` for this job).", ""]
@@ -99,14 +100,22 @@ def main():
                  f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}): there both formulations pay the same stage "
                  "Jacobians and recursion, and ID saves only the ABA derivatives and the dense dynamics products "
                  "(docs/solvers.md)")
+    def outcomes(pair):
+        return {f: ("diverged at %.3f s" % s["diverged_at"] if s["diverged"] else
+                    ("reached" if s["reached"] else "not reached") + " (final %.1e)" % s["final_q_error"])
+                for f, s in pair.items()}
     fd, idd = cartpole["fd"], cartpole["id"]
-    outcome = {f: ("diverged at %.3f s" % s["diverged_at"] if s["diverged"] else
-                   ("reached" if s["reached"] else "not reached") + " (final %.1e)" % s["final_q_error"])
-               for f, s in cartpole.items()}
+    outcome = outcomes(cartpole)
     lines.append(f"- Under-actuated cart-pole swing-up (mjcf/cartpole_swingup.json, C/GMRES, kmax = "
                  f"{fd['task']['cgmres']['kmax']}): ID/FD {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
                  f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); FD {outcome['fd']}, ID {outcome['id']}; "
                  "`fig2_cartpole.png`")
+    fd, idd = acrobot["fd"], acrobot["id"]
+    outcome = outcomes(acrobot)
+    lines.append(f"- Under-actuated acrobot swing-up (mjcf/acrobot_swingup.json, Riccati SQP-RTI): ID/FD "
+                 f"{idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
+                 f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); FD {outcome['fd']}, ID {outcome['id']}; "
+                 "`fig2_acrobot.png`")
     lines += ["", "Same control from both formulations (Q_a = 0): relative RMS difference of the torque "
               "histories, RMS of |u_ID − u_FD| over RMS of |u_FD|:", ""]
     for d, name in VARIANTS:

@@ -45,6 +45,13 @@ for f in fd id; do
     --log "$results/cartpole_${f}.csv" --summary "$results/cartpole_${f}.json"
 done
 
+# and the acrobot, its shoulder passive, swung up by the elbow under the Riccati solver
+for f in fd id; do
+  echo "== acrobot swing-up: Riccati SQP-RTI (${f^^})"
+  "$idmpc" swingup --task "$here/mjcf/acrobot_swingup.json" --formulation "$f" \
+    --log "$results/acrobot_${f}.csv" --summary "$results/acrobot_${f}.json"
+done
+
 echo "== Fig. 2"
 /usr/bin/python3 "$here/tools/plot_fig2.py" "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
   --labels "C/GMRES (FD)" "C/GMRES (ID)" --residual -o "$results/fig2.png"
@@ -56,6 +63,10 @@ echo "== Fig. 2"
   --labels "C/GMRES (FD)" "C/GMRES (ID)" --residual --title "Cart-pole swing-up (the pole passive)" \
   -o "$results/fig2_cartpole.png"
 
+/usr/bin/python3 "$here/tools/plot_fig2.py" "$results/acrobot_fd.csv" "$results/acrobot_id.csv" \
+  --labels "Riccati (FD)" "Riccati (ID)" --residual --title "Acrobot swing-up (the shoulder passive)" \
+  -o "$results/fig2_acrobot.png"
+
 echo "== video"
 "$idmpc" render "$model" --compare "$results/swingup_fd_matrix_paper.csv" "$results/swingup_id_matrix_paper.csv" \
   --out "$results/swingup_fd_vs_id.mp4"
@@ -63,4 +74,4 @@ echo "== video"
 echo "== report"
 /usr/bin/python3 "$here/tools/report.py" "$results"
 echo
-echo "results in $results: report.md, fig2.png, fig2_riccati.png, fig2_cartpole.png, swingup_fd_vs_id.mp4, swingup_*.csv, swingup_*.json, cartpole_*"
+echo "results in $results: report.md, fig2.png, fig2_riccati.png, fig2_cartpole.png, fig2_acrobot.png, swingup_fd_vs_id.mp4, swingup_*.csv, swingup_*.json, cartpole_*, acrobot_*"

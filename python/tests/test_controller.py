@@ -305,16 +305,30 @@ def test_the_riccati_solver_from_a_task_and_from_settings():
         bad.validate()
 
 
+@pytest.mark.parametrize("solver", ["cgmres", "riccati"])
 @pytest.mark.parametrize("formulation", ["fd", "id"])
-def test_under_actuated_task_runs_from_python_and_leaves_the_passive_joint_alone(formulation):
-    # the shipped cart-pole swing-up, its first 0.3 s: the hinge has no actuator
+def test_under_actuated_task_runs_from_python_and_leaves_the_passive_joint_alone(formulation, solver):
+    # the shipped cart-pole swing-up, its first 0.3 s, under either solver: the hinge has no actuator
     task = idmpc.load_task(str(MJCF / "cartpole_swingup.json"))
     task.formulation = formulation
+    task.solver = solver
     task.duration = 0.3
     run = idmpc.TaskRun(task)
     assert run.model.unactuated_joints == [1] and run.model.actuated_joints == [0]
     assert np.isinf(run.torque_lower[1]) and np.isinf(run.torque_upper[1])
     r = run.run()
-    assert r["summary"]["diverged"] is False
+    assert r["summary"]["diverged"] is False and r["summary"]["task"].get("solver", "cgmres") == solver
     assert np.all(r["u"][:, 1] == 0) and np.all(r["u_commanded"][:, 1] == 0)
     assert np.all(np.abs(r["u"][:, 0]) <= 10) and np.abs(r["u"][:, 0]).max() > 5
+
+
+@pytest.mark.parametrize("formulation", ["fd", "id"])
+def test_the_acrobot_swing_up_runs_from_python(formulation):
+    # the shipped Riccati task, its first 0.5 s: the elbow pumps within its 10 N m, the shoulder gets nothing
+    task = idmpc.load_task(str(MJCF / "acrobot_swingup.json"))
+    task.formulation = formulation
+    task.duration = 0.5
+    r = idmpc.TaskRun(task).run()
+    assert r["summary"]["diverged"] is False and r["summary"]["task"]["solver"] == "riccati"
+    assert np.all(r["u"][:, 0] == 0) and np.all(r["u_commanded"][:, 0] == 0)
+    assert np.all(np.abs(r["u"][:, 1]) <= 10) and np.abs(r["u"][:, 1]).max() > 5

@@ -1,7 +1,9 @@
 // Under-actuated models in the closed loop (formulations.md §Under-actuation), under MuJoCo:
-// the plant's passive joint never receives a torque, FD and ID solve the same problem, and the
-// shipped cart-pole swing-up (mjcf/cartpole_swingup.json) swings the pole up and balances it in
-// both formulations within the cart's force limit.
+// the plant's passive joint never receives a torque, FD and ID solve the same problem, the
+// shipped cart-pole swing-up (mjcf/cartpole_swingup.json, C/GMRES) and the acrobot and pendubot
+// swing-ups (mjcf/acrobot_swingup.json, pendubot_swingup.json, the Riccati solver) swing up and
+// balance in both formulations within the actuators' limits, and unseen models balance with the
+// defaults under both solver families.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -96,11 +98,73 @@ TEST_P(UnderActuatedLoop, CartpoleSwingsUpAndBalances) {
   EXPECT_LE((res.final_q - run.settings().q_ref).cwiseAbs().maxCoeff(), task.reach_tolerance);
 }
 
+// The Riccati solver's swing-up tasks: the passive joint gets nothing (the first 0.3 s) ...
+using RiccatiCase = std::tuple<std::string, Formulation>;
+class RiccatiUnderActuatedLoop : public ::testing::TestWithParam<RiccatiCase> {};
+
+Task riccati_task(const RiccatiCase& c) {
+  Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/" + std::get<0>(c) + "_swingup.json");
+  task.formulation = to_string(std::get<1>(c));
+  return task;
+}
+
+TEST_P(RiccatiUnderActuatedLoop, ThePassiveJointGetsNoTorqueAndTheActuatorStaysWithinItsRange) {
+  Task task = riccati_task(GetParam());
+  task.duration = 0.3;
+  mj::TaskRun run(task);
+  ASSERT_EQ(run.settings().solver, SolverKind::kRiccati);
+  const int passive = run.model().unactuated_joints.at(0), actuated = run.model().actuated_joints.at(0);
+  const double limit = std::get<0>(GetParam()) == "acrobot" ? 10.0 : 20.0;
+  mj::ClosedLoopSettings ls = run.loop_settings();
+  ls.phase_timing = false;
+  double on_passive = 0, worst = 0;
+  const mj::RunResult res = run.run(ls, [&](const mj::StepRecord& s) {
+    on_passive = std::max({on_passive, std::abs(s.u[passive]), std::abs(s.u_commanded[passive])});
+    worst = std::max(worst, std::abs(s.u[actuated]));
+  });
+  ASSERT_FALSE(res.diverged) << res.divergence_reason;
+  EXPECT_EQ(on_passive, 0.0) << "a torque was commanded on the passive joint";
+  EXPECT_LE(worst, limit);
+  EXPECT_GT(worst, 0.5 * limit) << "the swing-up starts with a strong push";
+}
+
+// ... and the whole swing-up, 10 s (acceptance tier)
+TEST_P(RiccatiUnderActuatedLoop, SwingsUpAndBalances) {
+  const Task task = riccati_task(GetParam());
+  mj::TaskRun run(task);
+  const int actuated = run.model().actuated_joints.at(0);
+  const double limit = std::get<0>(GetParam()) == "acrobot" ? 10.0 : 20.0;
+  mj::ClosedLoopSettings ls = run.loop_settings();
+  ls.phase_timing = false;
+  double worst = 0, upright_since = -1;
+  const mj::RunResult res = run.run(ls, [&](const mj::StepRecord& s) {
+    worst = std::max(worst, std::abs(s.u[actuated]));
+    const bool upright = s.q.cwiseAbs().maxCoeff() < 0.1;
+    if (!upright) upright_since = -1;
+    if (upright && upright_since < 0) upright_since = s.t;
+  });
+  ASSERT_FALSE(res.diverged) << res.divergence_reason << " at " << res.diverged_at;
+  EXPECT_LE(worst, limit);
+  // measured: upright for good (every joint within 0.1 rad) at 5.2 s (FD) and 5.6 s (ID) on the
+  // acrobot after three swings, at 1.6 s on the pendubot; 1.2e-3–1.6e-3 and 7e-12 rad at 10 s
+  EXPECT_GT(upright_since, 1.0) << "upright too soon for a swing-up from hanging";
+  EXPECT_LT(upright_since, 8.0);
+  EXPECT_LE((res.final_q - run.settings().q_ref).cwiseAbs().maxCoeff(), task.reach_tolerance);
+}
+
+INSTANTIATE_TEST_SUITE_P(Tasks, RiccatiUnderActuatedLoop,
+                         ::testing::Combine(::testing::Values("acrobot", "pendubot"),
+                                            ::testing::Values(Formulation::kForwardDynamics,
+                                                              Formulation::kInverseDynamics)),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) + "_" + to_string(std::get<1>(info.param));
+                         });
+
 // Defaults that transfer (docs/tasks.md): an under-actuated model that is not shipped, given with
 // only the model, a start near its upright equilibrium and that equilibrium as target, balances
 // with the defaults (horizon 0.5 s, automatic weights, kmax "auto", the LQR value of the target as
-// terminal cost) under FD and ID. The models here are written for this test: a heavier cart with
-// a shorter, heavier pole, and a pendubot of unequal links.
+// terminal cost) under FD and ID, with either solver family. The models here are written for
+// this test: a heavier cart with a shorter, heavier pole, and a pendubot of unequal links.
 const char* kOtherCartpole = R"(<mujoco model="other_cartpole">
   <option timestep="0.001"/>
   <worldbody>
@@ -126,11 +190,11 @@ const char* kOtherPendubot = R"(<mujoco model="other_pendubot">
   <actuator><motor joint="shoulder" ctrllimited="true" ctrlrange="-30 30"/></actuator>
 </mujoco>)";
 
-using DefaultsCase = std::tuple<std::string, Formulation>;
+using DefaultsCase = std::tuple<std::string, Formulation, SolverKind>;
 class UnderActuatedDefaults : public ::testing::TestWithParam<DefaultsCase> {};
 
 TEST_P(UnderActuatedDefaults, BalancesAModelItHasNotSeen) {
-  const auto& [name, formulation] = GetParam();
+  const auto& [name, formulation, solver] = GetParam();
   const std::filesystem::path path =
       std::filesystem::temp_directory_path() / ("idmpc_" + name + "_" + std::to_string(::getpid()) + ".xml");
   {
@@ -143,24 +207,30 @@ TEST_P(UnderActuatedDefaults, BalancesAModelItHasNotSeen) {
   task.qref = {0.0, 0.0};
   task.duration = 3;
   task.formulation = to_string(formulation);
+  task.solver = to_string(solver);
   mj::TaskRun run(task);
   std::filesystem::remove(path);
-  EXPECT_EQ(run.settings().cgmres.kmax, kUnderActuatedKmax);
+  if (solver == SolverKind::kCgmres) {
+    EXPECT_EQ(run.settings().cgmres.kmax, kUnderActuatedKmax);
+  }
   ASSERT_EQ(run.controller().problem().terms().terminal_weight().rows(), 4) << "the LQR value as terminal cost";
   mj::ClosedLoopSettings ls = run.loop_settings();
   ls.phase_timing = false;
   const mj::RunResult res = run.run(ls);
   ASSERT_FALSE(res.diverged) << res.divergence_reason << " at " << res.diverged_at;
-  // measured at 3 s: 3.6e-4–3.7e-4 (cart-pole), 1.2e-4–1.3e-4 rad (pendubot)
+  // measured at 3 s: 3.6e-4–3.7e-4 (cart-pole), 1.2e-4–1.3e-4 rad (pendubot) under C/GMRES;
+  // 3.8e-4 and 1.2e-4–1.3e-4 under the Riccati solver
   EXPECT_LE((res.final_q - run.settings().q_ref).cwiseAbs().maxCoeff(), task.reach_tolerance);
 }
 
 INSTANTIATE_TEST_SUITE_P(Models, UnderActuatedDefaults,
                          ::testing::Combine(::testing::Values("cartpole", "pendubot"),
                                             ::testing::Values(Formulation::kForwardDynamics,
-                                                              Formulation::kInverseDynamics)),
+                                                              Formulation::kInverseDynamics),
+                                            ::testing::Values(SolverKind::kCgmres, SolverKind::kRiccati)),
                          [](const auto& info) {
-                           return std::get<0>(info.param) + "_" + to_string(std::get<1>(info.param));
+                           return std::get<0>(info.param) + "_" + to_string(std::get<1>(info.param)) + "_" +
+                                  to_string(std::get<2>(info.param));
                          });
 
 }  // namespace
