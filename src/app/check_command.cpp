@@ -64,8 +64,9 @@ void run(const CheckOptions& opt) {
   options.actuate_every_joint = opt.actuate_every_joint;
   options.joint_force_lower = loaded.joint_force_lower;
   options.joint_force_upper = loaded.joint_force_upper;
-  // the comparison with MuJoCo needs no actuators: actuators the controller cannot use are
-  // reported, not refused (a model the import refuses whatever its actuators is refused)
+  // the comparison with MuJoCo needs no actuators: with actuators the controller cannot use, the
+  // dynamics are still compared, then check fails with the reason swingup would give (a model
+  // the import refuses whatever its actuators is refused at once)
   std::string actuation_problem;
   mj::ImportedModel imported = [&] {
     try {
@@ -101,6 +102,8 @@ void run(const CheckOptions& opt) {
   }
   std::printf("all %zu checks passed at %d random states (seed %u)\n", entries.size(),
               opt.samples, opt.seed);
+  // check accepts what swingup accepts: the dynamics above are compared all the same
+  if (!actuation_problem.empty()) throw std::runtime_error(actuation_problem);
 }
 
 }  // namespace

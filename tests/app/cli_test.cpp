@@ -1462,7 +1462,7 @@ TEST_F(Cli, DirectTorquesOnAnUnderActuatedModelNeedTheConfirmation) {
 
 // check names the passive joints of an under-actuated model, and compares its dynamics; actuators
 // the controller cannot use are reported instead of refused
-TEST_F(Cli, CheckNamesUnactuatedJointsAndReportsActuatorsTheControllerCannotUse) {
+TEST_F(Cli, CheckNamesUnactuatedJointsAndRefusesActuatorsTheControllerCannotUse) {
   write("acrobot.xml", kAcrobotModel);
   const Result r = idmpc("check acrobot.xml --samples 2");
   EXPECT_EQ(r.code, 0) << r.err;
@@ -1480,9 +1480,13 @@ TEST_F(Cli, CheckNamesUnactuatedJointsAndReportsActuatorsTheControllerCannotUse)
   tendon.replace(tendon.find(R"(joint="elbow" gear="2")"), 22, R"(tendon="t")");
   write("tendon.xml", tendon);
   const Result t = idmpc("check tendon.xml --samples 2");
-  EXPECT_EQ(t.code, 0) << t.err;
+  // the dynamics are still compared, then check refuses the file as swingup does, with its line
   EXPECT_NE(t.out.find("does not act on a joint"), std::string::npos) << t.out;
   EXPECT_NE(t.out.find("all 16 checks passed"), std::string::npos) << t.out;
+  expect_error(t, {"does not act on a joint"});
+  const Result s = idmpc("swingup tendon.xml --duration 0.01 --quiet");
+  expect_error(s, {"does not act on a joint"});
+  EXPECT_EQ(t.err, s.err) << "check and swingup refuse the file alike";
 }
 
 // a Menagerie arm written for MuJoCo 3: translated, servos replaced, limits from the file
