@@ -427,6 +427,44 @@ TEST_P(Continuation, FullHorizonInitializationWithAndWithoutTorqueLimits) {
   }
 }
 
+// The full-horizon start solves the problem by the Riccati solver first, then polishes by
+// Newton–GMRES. On a heavy planar two-link arm (drawn by tools/arm_population.py) the
+// continuation alone stalls in FD at ‖F‖ = 148 (measured), whence the closed loop diverged at
+// 35 ms; from the Riccati solver's solution both formulations reach the tolerance.
+const char* kHeavyTwoLink = R"(<mujoco model="heavy_two_link">
+  <worldbody>
+    <body name="link0" pos="0 0 0.2"><joint name="joint0" axis="0 1 0"/>
+      <inertial pos="0 0 0.183661" mass="12.3146" diaginertia="0.139694 0.139694 0.00123146"/>
+      <body name="link1" pos="0 0 0.367321"><joint name="joint1" axis="0 1 0"/>
+        <inertial pos="0 0 0.0946371" mass="9.30557" diaginertia="0.0287113 0.0287113 0.000930557"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="joint0" ctrllimited="true" ctrlrange="-175.032 175.032"/>
+    <motor joint="joint1" ctrllimited="true" ctrlrange="-32.2527 32.2527"/></actuator>
+</mujoco>)";
+
+TEST_P(Continuation, FullHorizonStartFromTheRiccatiSolution) {
+  const auto& [formulation, mode] = GetParam();
+  mj::ModelPtr m = mj::load_model_from_string(kHeavyTwoLink);
+  const Model model = mj::import_model(m.get(), "heavy_two_link.xml").model;
+  const VecX<double> q0 = (VecX<double>(2) << 0.39166573353688694, -0.4673388790854809).finished();
+  const VecX<double> q_ref = (VecX<double>(2) << -0.3221416709640257, -1.3983380994135193).finished();
+  const OcpWeights w{VecX<double>::Constant(2, 100.0), VecX<double>::Constant(2, 10.0), VecX<double>::Zero(2),
+                     (VecX<double>(2) << 0.000938, 0.467).finished()};
+  TorqueLimits limits;
+  limits.lower = (VecX<double>(2) << -175.032, -32.2527).finished();
+  limits.upper = -limits.lower;
+  Shooting ocp(model, formulation, mode, w, q_ref, 25, limits);
+  CgmresSettings s;
+  s.alpha = 0;
+  s.init_full_horizon = true;
+  Cgmres solver(ocp, s);
+  const double tolerance = s.init_tolerance * std::sqrt(static_cast<double>(ocp.dim()));
+  EXPECT_LE(solver.initialize(0.0, q0, VecX<double>::Zero(2)), tolerance);
+  expect_inside(ocp, solver.solution(), limits, 0.0);
+}
+
 // With limits an update first makes (d, ρ) consistent with the torques at the measured state
 // (one more evaluation of F), then runs as without.
 TEST_P(Continuation, UpdateWithTorqueLimitsCostsKmaxPlusFourEvaluations) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -10,6 +11,7 @@
 
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/model/checks.hpp"
+#include "idmpc/solver/riccati.hpp"
 
 namespace idmpc {
 namespace {
@@ -34,6 +36,13 @@ constexpr double kMinimumStep = 1e-8;
 constexpr double kInitRelativeTolerance = 1e-8;
 // a horizon step that Newton cannot solve is halved, down to this fraction of T/kInitHorizonSteps
 constexpr double kInitMinimumHorizonStep = 1.0 / 64;
+// the full-horizon start first solves the problem by the Riccati solver (Gauss–Newton SQP with a
+// line search on the cost: a globalized method, where Newton on ‖F‖ stalls in a nonconvex
+// problem), at most this many iterations to this KKT residual, then polishes its inputs by
+// Newton–GMRES on F; the continuation below runs only if ‖F‖ stays above kInitAccept
+constexpr int kInitRiccatiIterations = 200;
+constexpr double kInitRiccatiTolerance = 1e-9;
+constexpr double kInitAccept = 1e-6;
 
 std::string text(double x) {
   std::ostringstream o;
@@ -168,7 +177,23 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
   }
   if (m + ne > 0) norm = newton(sd);
   for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd, sd) = z;
-  if (full) norm = solve_full_horizon(q, v, T);
+  if (full) {
+    // the Riccati solver's solution polished; else (or if better) the continuation from zero
+    const VecX<double> zero_horizon = U_;
+    norm = start_from_riccati(t, q, v, T);
+    if (!(norm <= kInitAccept)) {
+      const VecX<double> riccati = U_;
+      const double riccati_norm = norm;
+      U_ = zero_horizon;
+      ocp_.problem().set_dummy_weight_factor(m > 0 ? std::pow(10.0, kInitDummyWeightDecades) : 1.0);
+      norm = solve_full_horizon(q, v, T);
+      if (riccati_norm < norm) {
+        U_ = riccati;
+        norm = riccati_norm;
+        ocp_.problem().set_dummy_weight_factor(1.0);
+      }
+    }
+  }
   Udot_.setZero();
   residual_norm_ = norm;
   if (multiple()) {
@@ -180,10 +205,40 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
   return norm;
 }
 
-// horizon continuation 0 → T, then dummy-weight continuation down to nominal; damped
-// Newton–GMRES at each level, (d, ρ) kept positive
-double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
+double Cgmres::start_from_riccati(double t, const Eigen::Ref<const VecX<double>>& q,
                                   const Eigen::Ref<const VecX<double>>& v, double T) {
+  const int ni = ocp_.problem().dummy_offset(), m = ocp_.problem().m(), sd = ocp_.stage_dim();
+  RiccatiSettings rs;
+  rs.init_iterations = kInitRiccatiIterations;
+  rs.init_tolerance = kInitRiccatiTolerance;
+  try {
+    RiccatiSolver riccati(ocp_.problem(), T, settings_.dt, rs);
+    if (interrupt_check_) riccati.set_interrupt_check(interrupt_check_);
+    riccati.initialize(t, q, v);
+    ocp_.problem().set_dummy_weight_factor(1.0);
+    for (int i = 0; i < ocp_.N(); ++i) {
+      U_.segment(i * sd, ni) = riccati.inputs().col(i);
+      U_.segment(i * sd + ni, sd - ni).setZero();  // (d, ρ) below, ν from zero
+    }
+  } catch (const std::runtime_error&) {
+    return std::numeric_limits<double>::infinity();  // its start diverged: the continuation instead
+  }
+  if (m > 0) {
+    VecX<double> F(ocp_.dim());
+    ocp_.residual(U_, q, v, T, F);
+    for (int i = 0; i < ocp_.N(); ++i) {
+      ocp_.problem().torque_bounds().consistent_dummy(ocp_.torques().col(i), U_.segment(i * sd + ni, m),
+                                                      U_.segment(i * sd + ni + m, m));
+    }
+  }
+  return solve_full_horizon(q, v, T, false);
+}
+
+// horizon continuation 0 → T, then dummy-weight continuation down to nominal; damped
+// Newton–GMRES at each level, (d, ρ) kept positive. Without `continuation`: Newton–GMRES at T
+// from U_ as it is (the Riccati solver's start)
+double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
+                                  const Eigen::Ref<const VecX<double>>& v, double T, bool continuation) {
   const int ni = ocp_.problem().dummy_offset(), m = ocp_.problem().m(), sd = ocp_.stage_dim(), dim = ocp_.dim();
   const double h = settings_.h, tolerance = settings_.init_tolerance * std::sqrt(static_cast<double>(dim));
   Gmres gmres(dim, std::min(dim, kInitKrylov));
@@ -236,7 +291,7 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
   // the horizon opened in steps of at most T/kInitHorizonSteps, halved where Newton fails
   const double max_step = T / kInitHorizonSteps, min_step = max_step * kInitMinimumHorizonStep;
   VecX<double> U_solved = U_;
-  double T_solved = 0, dT = max_step;
+  double T_solved = continuation ? 0 : T, dT = max_step;
   while (T_solved < T && dT >= min_step) {
     const double Tk = std::min(T, T_solved + dT);
     if (newton(Tk)) {
@@ -250,7 +305,7 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
   }
   if (T_solved < T) newton(T);  // the best Newton can do from the last solved horizon
   // then a decade less of dummy weight at a time; ρ = r_d / 2sd follows
-  for (int left = m > 0 ? kInitDummyWeightDecades - 1 : -1; left >= 0; --left) {
+  for (int left = m > 0 && continuation ? kInitDummyWeightDecades - 1 : -1; left >= 0; --left) {
     ocp_.problem().set_dummy_weight_factor(std::pow(10.0, left));
     for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd + ni + m, m) *= 0.1;
     newton(T);

@@ -70,10 +70,14 @@ class Cgmres {
   /// @brief Zero-horizon initialization at time t: Newton on the one-stage problem F_0 = 0
   /// (every stage sees x), copied to all stages. With torque limits, Newton first on the input
   /// alone (ρ = 0), then on the whole stage block from (d, ρ) consistent with that input's
-  /// torque. With settings.init_full_horizon and T(t) > 0, that one-stage solution at T = 0
-  /// starts a continuation: the horizon grown to T(t) in kInitHorizonSteps, then (with limits)
-  /// the dummy weight brought down from 10⁴ × nominal, each level solved by damped
-  /// Newton–GMRES keeping d, ρ > 0. Returns ‖F‖ reached (one stage, or all N stages). Under
+  /// torque. With settings.init_full_horizon and T(t) > 0 the full problem is solved first by
+  /// the Riccati solver (riccati.hpp: Gauss–Newton SQP with a line search on the cost, on the
+  /// same OcpProblem), its inputs then polished by damped Newton–GMRES on F with (d, ρ)
+  /// consistent with their torques. If that leaves ‖F‖ above 1e-6, the one-stage solution at
+  /// T = 0 starts a continuation instead: the horizon grown to T(t) in kInitHorizonSteps, then
+  /// (with limits) the dummy weight brought down from 10⁴ × nominal, each level solved by damped
+  /// Newton–GMRES keeping d, ρ > 0; the better of the two is kept. Returns ‖F‖ reached (one
+  /// stage, or all N stages). Under
   /// multiple shooting the stored trajectories are then those of the solution's rollout (zero
   /// defects): both schemes start from the same point.
   double initialize(double t, const Eigen::Ref<const VecX<double>>& q,
@@ -127,6 +131,10 @@ class Cgmres {
 
  private:
   double solve_full_horizon(const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
+                            double T, bool continuation = true);
+  // the full-horizon start from the Riccati solver's solution, polished by Newton–GMRES; ‖F‖
+  // reached (infinite if that solver's start diverged)
+  double start_from_riccati(double t, const Eigen::Ref<const VecX<double>>& q, const Eigen::Ref<const VecX<double>>& v,
                             double T);
   void synchronize_dummy();
   // the update at (t, x); frozen: newton_step
