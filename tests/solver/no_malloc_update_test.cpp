@@ -172,6 +172,32 @@ TEST(NoMallocRiccati, UpdatesDoNotAllocate) {
   }
 }
 
+// under-actuated: FD's n_u inputs, ID's elimination of the passive torques, the terminal P
+TEST(NoMallocRiccati, UnderActuatedUpdatesDoNotAllocate) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/cartpole.xml");
+  const double inf = std::numeric_limits<double>::infinity();
+  const TorqueLimits limits{(VecX<double>(2) << -10, -inf).finished(), (VecX<double>(2) << 10, inf).finished()};
+  const VecX<double> q = (VecX<double>(2) << 0.2, 0.3).finished(), v = (VecX<double>(2) << 0.5, -1.0).finished();
+  MatX<double> P = MatX<double>::Identity(4, 4);
+  P(0, 1) = P(1, 0) = 0.3;
+  for (Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    SCOPED_TRACE(to_string(f));
+    OcpProblem problem(p.model, f, DerivativeMode::kMatrix, paper_weights(2), VecX<double>::Zero(2), 25, limits);
+    problem.set_terminal_weight(P);
+    RiccatiSettings rs;
+    rs.iterations = 2;
+    rs.line_search = true;
+    RiccatiSolver solver(problem, 0.5, 1e-3, rs);
+    solver.initialize(0.0, q, v);
+    ASSERT_TRUE(solver.update(0.001, q, v)) << solver.failure();
+    CountAllocations c;
+    for (int k = 2; k <= 4; ++k) {
+      if (!solver.update(k * 1e-3, q, v)) ADD_FAILURE() << solver.failure();
+    }
+    EXPECT_EQ(c.count(), 0);
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Controllers, NoMallocUpdate,
     ::testing::Combine(::testing::Values(Formulation::kForwardDynamics, Formulation::kInverseDynamics),

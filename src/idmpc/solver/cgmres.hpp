@@ -73,7 +73,7 @@ class Cgmres {
   /// torque. With settings.init_full_horizon and T(t) > 0 the full problem is solved first by
   /// the Riccati solver (riccati.hpp: Gauss–Newton SQP with a line search on the cost, on the
   /// same OcpProblem), its inputs then polished by damped Newton–GMRES on F with (d, ρ)
-  /// consistent with their torques. If that leaves ‖F‖ above 1e-6, the one-stage solution at
+  /// consistent with their torques. If that leaves ‖F‖ above 1e-4, the one-stage solution at
   /// T = 0 starts a continuation instead: the horizon grown to T(t) in kInitHorizonSteps, then
   /// (with limits) the dummy weight brought down from 10⁴ × nominal, each level solved by damped
   /// Newton–GMRES keeping d, ρ > 0; the better of the two is kept. Returns ‖F‖ reached (one
