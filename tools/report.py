@@ -32,6 +32,16 @@ def max_angle_difference(log_a, log_b):
     return max(abs(a.q[j][k] - b.q[j][k]) for j in range(a.n) for k in range(min(len(a.t), len(b.t))))
 
 
+def write_lines(path, lines):
+    """Writes the lines to path whole or not at all (a temporary beside it, then renamed)."""
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+    print("wrote " + path)
+
+
 def cpu_model():
     try:
         with open("/proc/cpuinfo") as f:

@@ -35,7 +35,7 @@ import subprocess
 import sys
 import tempfile
 
-from report import cpu_model
+from report import cpu_model, write_lines
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
@@ -219,12 +219,7 @@ def main():
     rng = random.Random(a.seed)
     with tempfile.TemporaryDirectory() as work:
         lines = (cgmres_verdict if a.solver == "cgmres" else riccati_verdict)(a, rng, work)
-    os.makedirs(os.path.dirname(a.out), exist_ok=True)
-    tmp = a.out + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(tmp, a.out)
-    print("wrote " + a.out)
+    write_lines(a.out, lines)
 
 
 if __name__ == "__main__":

@@ -267,6 +267,38 @@ TEST_F(ImportTest, ServosAreReplacedByJointTorquesLimitedByTheirForceRange) {
   EXPECT_EQ(direct.model.n, 3);
 }
 
+// a servo without a forcerange but with a control range: the torque it gives at rest over its
+// control range and its joint's range (the control range where the joint has none), times the
+// gear; in MuJoCo the force is gain·ctrl + b0 + b1·q + b2·v (position: b1 = −kp; velocity: b2)
+TEST_F(ImportTest, ServosWithoutAForceRangeAreLimitedByWhatTheyGiveAtRest) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<position name="p0" joint="j0" kp="20" gear="2" ctrllimited="true" ctrlrange="-0.5 1"/>
+             <position name="p1" joint="j1" kp="50" ctrllimited="true" ctrlrange="-0.1 0.2"/>
+             <velocity name="v2" joint="j2" kv="3" ctrllimited="true" ctrlrange="-2 1"/>)",
+      R"(limited="false")"));
+  // j0 given a range: the servo's force at rest over ctrl ∈ [-0.5, 1] and q ∈ [-0.3, 0.4]
+  m->jnt_limited[0] = 1;
+  m->jnt_range[0] = -0.3;
+  m->jnt_range[1] = 0.4;
+  const mj::ImportedModel imported = mj::import_model(m.get(), "servos.xml");
+  const mj::Actuation& act = imported.actuation;
+  EXPECT_EQ(act.derived_limits, (std::vector<std::string>{"p0", "p1", "v2"}));
+  // p0: 20·(−0.5 − 0.4) = −18 … 20·(1 + 0.3) = 26, times gear 2
+  EXPECT_DOUBLE_EQ(act.torque_lower[0], -36);
+  EXPECT_DOUBLE_EQ(act.torque_upper[0], 52);
+  // p1, no joint range: the control range as positions, 50·(−0.1 − 0.2) … 50·(0.2 + 0.1)
+  EXPECT_DOUBLE_EQ(act.torque_lower[1], -15);
+  EXPECT_DOUBLE_EQ(act.torque_upper[1], 15);
+  // v2 at rest: 3·ctrl
+  EXPECT_DOUBLE_EQ(act.torque_lower[2], -6);
+  EXPECT_DOUBLE_EQ(act.torque_upper[2], 3);
+  EXPECT_TRUE(act.unbounded_joints.empty());
+  ASSERT_EQ(imported.notices.size(), 1u) << joined(imported.notices);
+  EXPECT_NE(imported.notices[0].find("'p0', 'p1', 'v2' declare no forcerange: limited by the force they give at rest"),
+            std::string::npos)
+      << imported.notices[0];
+}
+
 TEST_F(ImportTest, MusclesAreRefusedAndServosOnAnUnderActuatedModelLeaveTheBareJointPassive) {
   const mj::ModelPtr muscle = mj::load_model_from_string(chain_mjcf(
       "", R"(<motor name="m0" joint="j0"/><motor name="m1" joint="j1"/>

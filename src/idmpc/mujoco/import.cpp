@@ -338,6 +338,28 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
     }
     if (m->actuator_forcelimited[u]) {
       bound(dof, gear * m->actuator_forcerange[2 * u], gear * m->actuator_forcerange[2 * u + 1]);
+    } else if (!motor && m->actuator_ctrllimited[u]) {
+      // a servo without a force range: the force it gives at rest, gain·ctrl + b0 + b1·q, over
+      // its control range and its joint's range (the control range again where the joint has
+      // none: a position servo's targets), times the gear
+      const mjtNum* g = m->actuator_gainprm + u * mjNGAIN;
+      const mjtNum* b = m->actuator_biasprm + u * mjNBIAS;
+      const int joint = m->actuator_trnid[2 * u];
+      const double c[2] = {m->actuator_ctrlrange[2 * u], m->actuator_ctrlrange[2 * u + 1]};
+      const bool ranged = m->jnt_limited[joint];
+      const double q[2] = {ranged ? m->jnt_range[2 * joint] : c[0], ranged ? m->jnt_range[2 * joint + 1] : c[1]};
+      double lo = kInf, hi = -kInf;
+      for (const double ci : c) {
+        for (const double qi : q) {
+          const double force = g[0] * ci + b[0] + b[1] * qi;
+          lo = std::min(lo, force);
+          hi = std::max(hi, force);
+        }
+      }
+      if (std::isfinite(lo) && std::isfinite(hi) && hi > lo) {
+        bound(dof, gear * lo, gear * hi);
+        act.derived_limits.push_back(object_name(m, mjOBJ_ACTUATOR, u));
+      }
     }
   }
   if (servos) {
@@ -379,7 +401,12 @@ std::vector<std::string> actuation_notices(const mjModel* m, const Actuation& ac
       const mjtNum* b = m->actuator_biasprm + (u >= 0 ? u : 0) * mjNBIAS;
       position = position || b[1] != 0;
       velocity = velocity || (b[1] == 0 && b[2] != 0);
-      (u >= 0 && m->actuator_forcelimited[u] ? limited : unlimited).push_back(name);
+      const bool derived = std::find(act.derived_limits.begin(), act.derived_limits.end(), name) != act.derived_limits.end();
+      if (u >= 0 && m->actuator_forcelimited[u]) {
+        limited.push_back(name);
+      } else if (!derived) {
+        unlimited.push_back(name);
+      }
     }
     const std::string kind = position && velocity ? "position and velocity servos"
                              : position          ? "position servos"
@@ -388,7 +415,11 @@ std::vector<std::string> actuation_notices(const mjModel* m, const Actuation& ac
     std::string line = kind + " " + name_list(act.replaced_servos) +
                        " replaced by joint torques (applied directly; the plant disables the actuators)";
     if (!limited.empty()) line += ", limited by the forcerange × gear of " + name_list(limited);
-    if (!unlimited.empty()) line += "; " + name_list(unlimited) + " declare no forcerange";
+    if (!act.derived_limits.empty()) {
+      line += "; " + name_list(act.derived_limits) +
+              " declare no forcerange: limited by the force they give at rest over their control and joint ranges";
+    }
+    if (!unlimited.empty()) line += "; " + name_list(unlimited) + " declare no forcerange nor a control range";
     out.push_back(line);
   }
   if (!act.coupled_joints.empty()) {

@@ -43,11 +43,16 @@ struct Actuation {
   std::vector<int> actuator_of_dof;  ///< else ctrl[actuator_of_dof[i]] = τ_i · ctrl_per_torque[i]
   std::vector<double> ctrl_per_torque;
   /// Joint torque range each actuator can give (ctrlrange × gain × gear, forcerange × gear; a
-  /// replaced servo's forcerange × gear), intersected with ImportOptions::joint_force_lower/upper;
+  /// replaced servo's forcerange × gear, or without one its derived_limits), intersected with
+  /// ImportOptions::joint_force_lower/upper;
   /// ±infinity where unlimited, and with ImportOptions::direct_torque where the file declares none.
   VecX<double> torque_lower, torque_upper;
   /// Names of the servo actuators replaced by joint torques (then `direct`), in actuator order.
   std::vector<std::string> replaced_servos;
+  /// @brief Replaced servos without a forcerange whose torque range is derived: the force they
+  /// give at rest (gain·ctrl + b0 + b1·q) over their control range and their joint's range (the
+  /// control range where the joint has none), times the gear.
+  std::vector<std::string> derived_limits;
   /// Joints whose torque has no declared bound on either side ("joint 'j1'"), in dof order.
   std::vector<std::string> unbounded_joints;
   /// Joints no actuator of the model drives, actuated by direct torques on the user's

@@ -216,7 +216,9 @@ double Cgmres::start_from_riccati(double t, const Eigen::Ref<const VecX<double>>
     RiccatiSolver riccati(ocp_.problem(), T, settings_.dt, rs);
     if (interrupt_check_) riccati.set_interrupt_check(interrupt_check_);
     riccati.initialize(t, q, v);
-    ocp_.problem().set_dummy_weight_factor(1.0);
+    // the dummy weight from 10⁴ × nominal down, as in the continuation: the limits' barrier
+    // strong first, the solution kept inside while Newton moves it onto C/GMRES's formulation
+    ocp_.problem().set_dummy_weight_factor(m > 0 ? std::pow(10.0, kInitDummyWeightDecades) : 1.0);
     for (int i = 0; i < ocp_.N(); ++i) {
       U_.segment(i * sd, ni) = riccati.inputs().col(i);
       U_.segment(i * sd + ni, sd - ni).setZero();  // (d, ρ) below, ν from zero
@@ -236,8 +238,8 @@ double Cgmres::start_from_riccati(double t, const Eigen::Ref<const VecX<double>>
 }
 
 // horizon continuation 0 → T, then dummy-weight continuation down to nominal; damped
-// Newton–GMRES at each level, (d, ρ) kept positive. Without `continuation`: Newton–GMRES at T
-// from U_ as it is (the Riccati solver's start)
+// Newton–GMRES at each level, (d, ρ) kept positive. Without `continuation`: the horizon is T
+// from the start (U_ the Riccati solver's solution), the dummy-weight levels as above
 double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
                                   const Eigen::Ref<const VecX<double>>& v, double T, bool continuation) {
   const int ni = ocp_.problem().dummy_offset(), m = ocp_.problem().m(), sd = ocp_.stage_dim(), dim = ocp_.dim();
@@ -306,7 +308,7 @@ double Cgmres::solve_full_horizon(const Eigen::Ref<const VecX<double>>& q,
   }
   if (T_solved < T) newton(T);  // the best Newton can do from the last solved horizon
   // then a decade less of dummy weight at a time; ρ = r_d / 2sd follows
-  for (int left = m > 0 && continuation ? kInitDummyWeightDecades - 1 : -1; left >= 0; --left) {
+  for (int left = m > 0 ? kInitDummyWeightDecades - 1 : -1; left >= 0; --left) {
     ocp_.problem().set_dummy_weight_factor(std::pow(10.0, left));
     for (int i = 0; i < ocp_.N(); ++i) U_.segment(i * sd + ni + m, m) *= 0.1;
     newton(T);
