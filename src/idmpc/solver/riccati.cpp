@@ -4,8 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
-#include <cstdio>
-#include <cstdlib>
 
 #include "idmpc/dynamics/dynamics.hpp"
 #include "idmpc/dynamics/rnea.hpp"
@@ -88,7 +86,7 @@ RiccatiSolver::RiccatiSolver(OcpProblem problem, double Tf, double dt, const Ric
     T1_ = MatX<double>::Zero(n, nx);
     c_ = Vec::Zero(ne_);
     nu_e_ = Vec::Zero(ne_);
-    llt_e_ = Eigen::LLT<MatX<double>>(ne_);
+    llt_e_.assign(static_cast<size_t>(N), Eigen::LLT<MatX<double>>(ne_));
   }
   K0_ = MatX<double>::Zero(nu_, nx);
   const TorqueBounds& b = problem_.torque_bounds();
@@ -179,10 +177,8 @@ void RiccatiSolver::linearize(double t) {
         const int j = passive_[static_cast<size_t>(k)];
         sum += st.tau[j] * st.tau[j];
         nu_e_[k] = -gu_[j];
-        for (int l = 0; l < ne_; ++l) Mee_(k, l) = st.tau_u(j, passive_[static_cast<size_t>(l)]);
       }
-      llt_e_.compute(Mee_);
-      llt_e_.solveInPlace(nu_e_);
+      llt_e_[static_cast<size_t>(i)].solveInPlace(nu_e_);  // M_EE factored by eliminate
       nu_max_ = std::max(nu_max_, nu_e_.cwiseAbs().maxCoeff());
     } else {
       Fi_ = gu_;
@@ -207,10 +203,11 @@ void RiccatiSolver::eliminate(int i) {
     for (int l = 0; l < ne_; ++l) Mee_(k, l) = st.tau_u(j, passive_[static_cast<size_t>(l)]);
     for (int l = 0; l < nw_; ++l) Meu_(k, l) = st.tau_u(j, actuated_[static_cast<size_t>(l)]);
   }
-  llt_e_.compute(Mee_);  // a principal block of the mass matrix: positive definite
-  llt_e_.solveInPlace(Meu_);
-  llt_e_.solveInPlace(Cx_);
-  llt_e_.solveInPlace(c_);
+  Eigen::LLT<MatX<double>>& llt = llt_e_[static_cast<size_t>(i)];
+  llt.compute(Mee_);  // a principal block of the mass matrix: positive definite
+  llt.solveInPlace(Meu_);
+  llt.solveInPlace(Cx_);
+  llt.solveInPlace(c_);
   Z.setZero();
   Yx.setZero();
   y0.setZero();
@@ -450,7 +447,6 @@ double RiccatiSolver::iterate(double t, In q, In v, bool search) {
     if (halvings == kLineSearchHalvings) eps *= 10;
   }
   take_step(alpha, alpha_dual);
-  if (std::getenv("RDBG")) std::fprintf(stderr, "t %.3f kkt %.3g alpha %.3g ad %.3g eps %.2g |dU| %.3g |U| %.3g maxZ %.3g minS %.3g numax %.3g maxc %.3g |dX| %.3g\n", t, kkt, alpha, alpha_dual, eps, dU_.cwiseAbs().maxCoeff(), U_.cwiseAbs().maxCoeff(), Z_.size()?Z_.maxCoeff():0.0, S_.size()?S_.minCoeff():0.0, nu_max_, T_.row(1).cwiseAbs().maxCoeff(), dX_.cwiseAbs().maxCoeff());
   regularization_ = std::max(settings_.regularization, eps / 10);
   set_first_input();
   if (eliminate_) {

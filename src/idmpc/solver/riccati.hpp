@@ -167,7 +167,7 @@ class RiccatiSolver final : public MpcSolver {
   MatX<double> y0_, qp_defect_;          ///< y_0 (n × N); the defects B y_0 + b (2n × N)
   MatX<double> Mee_, Meu_, Cx_, LZ_, T1_, K0_;
   Vec c_, nu_e_;
-  Eigen::LLT<MatX<double>> llt_e_;
+  std::vector<Eigen::LLT<MatX<double>>> llt_e_;  ///< M_EE per stage (eliminate), reused for ν
   double nu_max_ = 0;  ///< the largest |ν| of the last linearization
   // bounded joints: joint index, lower and upper torque, barrier weight μ per stage
   std::vector<int> joint_;
