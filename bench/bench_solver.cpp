@@ -115,6 +115,20 @@ ResolvedTask paper_setup(int n, double Qa, int kmax) {
 }
 
 // one controller on one model, the swing-up it produced, and the solver replaying it
+// a recorded closed loop's measurements (t, q, v of a fixture): one step appended while it
+// runs, then only those of its successful updates kept
+template <typename Fixture> void record_step(Fixture& f, const mj::StepRecord& r) {
+  f.t.push_back(r.t);
+  f.q.push_back(r.q);
+  f.v.push_back(r.v);
+}
+template <typename Fixture> void keep_updates(Fixture& f, const mj::RunResult& result) {
+  const size_t ok = result.update_ms.size();
+  f.t.resize(ok);
+  f.q.resize(ok);
+  f.v.resize(ok);
+}
+
 struct SolverFixture {
   decltype(std::declval<Case>().key()) key;
   const BenchModel* bm = nullptr;
@@ -172,17 +186,11 @@ bool record_swingup(SolverFixture& f, const Case& c) {
   f.U.clear();
   const mj::RunResult result =
       mj::run_closed_loop(plant, controller, loop, [&](const mj::StepRecord& r) {
-        f.t.push_back(r.t);
-        f.q.push_back(r.q);
-        f.v.push_back(r.v);
+        record_step(f, r);
         f.U.push_back(controller.cgmres().solution());
       });
-  // keep the successful updates only
-  const size_t ok = result.update_ms.size();
-  f.t.resize(ok);
-  f.q.resize(ok);
-  f.v.resize(ok);
-  f.U.resize(ok);
+  keep_updates(f, result);
+  f.U.resize(f.t.size());
   f.diverged = result.diverged;
   f.diverged_at = result.diverged_at;
   return result.diverged;
@@ -363,15 +371,9 @@ RiccatiFixture& riccati_fixture(Formulation f, int n, int N) {
   loop.q0 = paper.q0;
   loop.v0 = v0;
   loop.phase_timing = false;
-  const mj::RunResult result = mj::run_closed_loop(plant, controller, loop, [&](const mj::StepRecord& r) {
-    fx.t.push_back(r.t);
-    fx.q.push_back(r.q);
-    fx.v.push_back(r.v);
-  });
-  const size_t ok = result.update_ms.size();
-  fx.t.resize(ok);
-  fx.q.resize(ok);
-  fx.v.resize(ok);
+  const mj::RunResult result =
+      mj::run_closed_loop(plant, controller, loop, [&](const mj::StepRecord& r) { record_step(fx, r); });
+  keep_updates(fx, result);
   fx.diverged = result.diverged;
   fx.solver = fx.start;
   return fx;
@@ -404,14 +406,7 @@ void BM_UnderActuated(benchmark::State& state, Formulation formulation, int kmax
     f.run = std::make_unique<mj::TaskRun>(task);
     mj::ClosedLoopSettings loop = f.run->loop_settings();
     loop.phase_timing = false;
-    const mj::RunResult result = f.run->run(loop, [&](const mj::StepRecord& r) {
-      f.t.push_back(r.t);
-      f.q.push_back(r.q);
-      f.v.push_back(r.v);
-    });
-    f.t.resize(result.update_ms.size());
-    f.q.resize(result.update_ms.size());
-    f.v.resize(result.update_ms.size());
+    keep_updates(f, f.run->run(loop, [&](const mj::StepRecord& r) { record_step(f, r); }));
     f.run->controller().initialize(f.run->q0(), VecX<double>::Zero(f.run->n()));
     f.start = std::make_unique<Cgmres>(f.run->controller().cgmres());
     f.solver.emplace(*f.start);
@@ -474,15 +469,8 @@ void BM_UnderActuatedRiccati(benchmark::State& state, Formulation formulation, i
     mj::TaskRun run(task);
     mj::ClosedLoopSettings loop = run.loop_settings();
     loop.phase_timing = false;
-    const mj::RunResult result = run.run(loop, [&](const mj::StepRecord& r) {
-      fx.t.push_back(r.t);
-      fx.q.push_back(r.q);
-      fx.v.push_back(r.v);
-    });
-    const size_t ok = result.update_ms.size();
-    fx.t.resize(ok);
-    fx.q.resize(ok);
-    fx.v.resize(ok);
+    const mj::RunResult result = run.run(loop, [&](const mj::StepRecord& r) { record_step(fx, r); });
+    keep_updates(fx, result);
     fx.diverged = result.diverged;
     run.controller().initialize(run.q0(), VecX<double>::Zero(run.n()));
     fx.start.emplace(dynamic_cast<const RiccatiSolver&>(run.controller().solver()));

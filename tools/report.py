@@ -110,22 +110,18 @@ def main():
                  f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}): there both formulations pay the same stage "
                  "Jacobians and recursion, and ID saves only the ABA derivatives and the dense dynamics products "
                  "(docs/solvers.md)")
-    def outcomes(pair):
-        return {f: ("diverged at %.3f s" % s["diverged_at"] if s["diverged"] else
-                    ("reached" if s["reached"] else "not reached") + " (final %.1e)" % s["final_q_error"])
-                for f, s in pair.items()}
-    fd, idd = cartpole["fd"], cartpole["id"]
-    outcome = outcomes(cartpole)
-    lines.append(f"- Under-actuated cart-pole swing-up (mjcf/cartpole_swingup.json, C/GMRES, kmax = "
-                 f"{fd['task']['cgmres']['kmax']}): ID/FD {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
-                 f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); FD {outcome['fd']}, ID {outcome['id']}; "
-                 "`fig2_cartpole.png`")
-    fd, idd = acrobot["fd"], acrobot["id"]
-    outcome = outcomes(acrobot)
-    lines.append(f"- Under-actuated acrobot swing-up (mjcf/acrobot_swingup.json, Riccati SQP-RTI): ID/FD "
-                 f"{idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
-                 f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); FD {outcome['fd']}, ID {outcome['id']}; "
-                 "`fig2_acrobot.png`")
+    # the under-actuated swing-ups: ID/FD per update and each formulation's outcome
+    for pair, what, figure in ((cartpole, "cart-pole swing-up (mjcf/cartpole_swingup.json, C/GMRES, kmax = %d)"
+                                % cartpole["fd"]["task"]["cgmres"]["kmax"], "fig2_cartpole.png"),
+                               (acrobot, "acrobot swing-up (mjcf/acrobot_swingup.json, Riccati SQP-RTI)",
+                                "fig2_acrobot.png")):
+        fd, idd = pair["fd"], pair["id"]
+        outcome = {f: ("diverged at %.3f s" % s["diverged_at"] if s["diverged"] else
+                       ("reached" if s["reached"] else "not reached") + " (final %.1e)" % s["final_q_error"])
+                   for f, s in pair.items()}
+        lines.append(f"- Under-actuated {what}: ID/FD {idd['mean_update_ms'] / fd['mean_update_ms']:.2f} "
+                     f"({idd['p50_update_ms'] / fd['p50_update_ms']:.2f}); FD {outcome['fd']}, ID {outcome['id']}; "
+                     f"`{figure}`")
     lines += ["", "Same control from both formulations (Q_a = 0): relative RMS difference of the torque "
               "histories, RMS of |u_ID − u_FD| over RMS of |u_FD|:", ""]
     for d, name in VARIANTS:
