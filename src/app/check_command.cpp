@@ -58,7 +58,10 @@ void run(const CheckOptions& opt) {
   }
   const mj::LoadedModel loaded = mj::load_model_translated(opt.model);
   const mjModel* m = loaded.model.get();
-  if (!loaded.translations.empty()) std::printf("%s\n", loaded.notice().c_str());
+  if (!loaded.translations.empty()) {
+    std::printf("%s\n", loaded.notice().c_str());
+    for (const std::string& t : loaded.translations) std::printf("  - %s\n", t.c_str());
+  }
   mj::ImportOptions options;
   options.direct_torque = opt.direct_torque;
   options.actuate_every_joint = opt.actuate_every_joint;

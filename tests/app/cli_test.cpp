@@ -1608,7 +1608,7 @@ std::string newer_mujoco_name(const ::testing::TestParamInfo<std::pair<std::stri
 
 INSTANTIATE_TEST_SUITE_P(
     Models, CliNewerMujoco,
-    ::testing::Values(std::make_pair(hinge_slide_mjcf("", R"(axis="0 1 0" actuatorgravcomp="true")"),
+    ::testing::Values(std::make_pair(hinge_slide_mjcf("", R"(axis="0 1 0" actuatorgravcomp="true" actuatorfrcrange="-1 1")"),
                                      std::string("'actuatorgravcomp'")),
                       std::make_pair(hinge_slide_mjcf("", R"(axis="0 1 0")", R"(actearly="true")"),
                                      std::string("'actearly'")),

@@ -38,6 +38,7 @@ constexpr double kInverseRounding = 1e-13;
 constexpr double kFiniteDifference = 1e-6;
 constexpr int kRandomTrees = 200;
 constexpr int kAlignedTrees = 25;  // random trees whose joint axes are all ±e_k
+constexpr int kGravcompTrees = 40;  // random trees with gravity compensation on some bodies
 constexpr int kShippedSeeds = 3;       // (model, seed) pairs per shipped model
 constexpr int kSamplesShipped = 3;     // random states per (shipped model, seed)
 constexpr int kSamplesRandomTree = 2;  // random states per random tree (keeps runtime low)
@@ -49,11 +50,12 @@ struct Case {
   unsigned seed = 0;  // random tree seed (if any) and seed of the random states
   int samples = 0;
   bool aligned = false;  // random tree with axis-aligned joints (RandomTreeOptions::aligned_axes)
+  bool gravcomp = false;  // random tree with gravity compensation (RandomTreeOptions::gravcomp)
 };
 
 void PrintTo(const Case& c, std::ostream* os) {
   *os << c.label << (c.path.empty() ? " (random_tree_mjcf(" + std::to_string(c.seed) +
-                                          (c.aligned ? ", aligned axes))" : "))")
+                                          (c.aligned ? ", aligned axes))" : c.gravcomp ? ", gravcomp))" : "))")
                                     : " (" + c.path + ", seed " + std::to_string(c.seed) + ")");
 }
 
@@ -83,6 +85,14 @@ std::vector<Case> random_tree_cases() {
   return out;
 }
 
+std::vector<Case> gravcomp_tree_cases() {
+  std::vector<Case> out;
+  for (unsigned s = 1; s <= kGravcompTrees; ++s) {
+    out.push_back({"gravcomp_tree_seed" + std::to_string(s), "", s, kSamplesRandomTree, false, true});
+  }
+  return out;
+}
+
 std::vector<Case> aligned_tree_cases() {
   std::vector<Case> out;
   for (unsigned s = 1; s <= kAlignedTrees; ++s) {
@@ -101,6 +111,7 @@ struct Loaded {
 std::unique_ptr<Loaded> load_case(const Case& c) {
   test::RandomTreeOptions options;
   options.aligned_axes = c.aligned;
+  options.gravcomp = c.gravcomp;
   mj::ModelPtr m = c.path.empty()
                        ? mj::load_model_from_string(test::random_tree_mjcf(c.seed, options))
                        : mj::load_model(c.path);
@@ -454,6 +465,8 @@ INSTANTIATE_TEST_SUITE_P(Shipped, DynamicsTest, ::testing::ValuesIn(shipped_case
 INSTANTIATE_TEST_SUITE_P(RandomTrees, DynamicsTest, ::testing::ValuesIn(random_tree_cases()),
                          case_name);
 INSTANTIATE_TEST_SUITE_P(AlignedTrees, DynamicsTest, ::testing::ValuesIn(aligned_tree_cases()),
+                         case_name);
+INSTANTIATE_TEST_SUITE_P(GravcompTrees, DynamicsTest, ::testing::ValuesIn(gravcomp_tree_cases()),
                          case_name);
 
 }  // namespace

@@ -46,6 +46,7 @@ constexpr double kInverseRounding = 1e-14;
 constexpr int kRandomTrees = 6;
 constexpr int kAlignedTrees = 2;
 constexpr int kFrictionTrees = 2;
+constexpr int kGravcompTrees = 6;  // random trees with gravity compensation on some bodies
 
 struct Case {
   std::string label;
@@ -61,9 +62,10 @@ const std::vector<Case>& cases() {
       const mj::ModelPtr m = mj::load_model(path);
       c.push_back({stem, mj::import_model(m.get(), stem).model});
     }
-    const auto tree = [&](const std::string& label, unsigned seed, bool aligned) {
+    const auto tree = [&](const std::string& label, unsigned seed, bool aligned, bool gravcomp = false) {
       test::RandomTreeOptions options;
       options.aligned_axes = aligned;
+      options.gravcomp = gravcomp;
       const mj::ModelPtr m = mj::load_model_from_string(test::random_tree_mjcf(seed, options));
       return mj::import_model(m.get(), label).model;
     };
@@ -74,6 +76,10 @@ const std::vector<Case>& cases() {
     for (unsigned s = 1; s <= kAlignedTrees; ++s) {
       const std::string label = "aligned_tree_seed" + std::to_string(s);
       c.push_back({label, tree(label, s, true)});
+    }
+    for (unsigned s = 1; s <= kGravcompTrees; ++s) {
+      const std::string label = "gravcomp_tree_seed" + std::to_string(s);
+      c.push_back({label, tree(label, s, false, true)});
     }
     for (unsigned s = 1; s <= kFrictionTrees; ++s) {
       const std::string label = "friction_tree_seed" + std::to_string(s);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "idmpc/mujoco/import.hpp"
+#include "idmpc/mujoco/gravcomp.hpp"
 #include "idmpc/mujoco/load.hpp"
 
 namespace idmpc {
@@ -151,6 +152,10 @@ TEST_F(MjcfTranslate, Fr3GetsMujoco3ServoGainsRangesAndForceLimits) {
   expect_one_notice(loaded, "actuatorfrcrange [-12, 12] becomes forcerange [-10, 10]");
   const std::string notice = loaded.notice();
   EXPECT_NE(notice.find("fr3_translate.xml' is written for a newer MuJoCo"), std::string::npos) << notice;
+  EXPECT_NE(notice.find(": 12 changes (autolimits, implicitfast as implicit, keyframe blanks, inheritrange ×3, kv ×3, "
+                        "actuatorfrcrange ×3), each listed by 'idmpc check'"),
+            std::string::npos)
+      << notice;
   EXPECT_EQ(notice.find('\n'), std::string::npos) << notice;
 }
 
@@ -316,9 +321,9 @@ TEST_F(MjcfTranslate, WhatCannotBeTranslatedIsListedAllAtOnceInOneLine) {
   const std::string message = load_error(path);
   for (const std::string& part :
        {"cannot load model '" + path + "'", std::string("needs a newer MuJoCo"), "this build uses MuJoCo " +
-        std::string(mj_versionString()), std::string("6 items"),
-        std::string("attribute 'eulerdamp' (<flag>, line 2)"), std::string("attribute 'gravcomp' (<body> 'upper', line 4)"),
-        std::string("attribute 'actuatorgravcomp' (<joint> 'shoulder', line 5)"),
+        std::string(mj_versionString()), std::string("5 items"),
+        std::string("attribute 'eulerdamp' (<flag>, line 2)"),
+        std::string("attribute 'actuatorgravcomp' (<joint> 'shoulder', line 5): with the joint's actuatorfrcrange"),
         std::string("element <frame> 'tool', line 7"),
         std::string("attribute 'actuatorfrcrange' (<joint> 'shoulder', line 5): it clamps the sum of the forces of "
                     "actuator 'm1', actuator 'm2', actuator 'pull'"),
@@ -327,6 +332,43 @@ TEST_F(MjcfTranslate, WhatCannotBeTranslatedIsListedAllAtOnceInOneLine) {
     EXPECT_NE(message.find(part), std::string::npos) << "lacks '" << part << "': " << message;
   }
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  EXPECT_EQ(message.find("attribute 'gravcomp'"), std::string::npos) << "gravcomp is translated: " << message;
+}
+
+// MuJoCo >= 2.3 applies −c·m·g at each body's centre of mass: with the same c on every body,
+// the passive force is c times the gravity torques MuJoCo computes itself (qfrc_bias at rest)
+TEST_F(MjcfTranslate, GravcompIsThePassiveForceMuJoCo23Applies) {
+  for (const double c : {1.0, 0.4}) {
+    const std::string gc = std::to_string(c);
+    const std::string path = write("gravcomp.xml", R"(<mujoco>
+  <worldbody>
+    <body name="upper" pos="0 0 1" gravcomp=")" + gc + R"(">
+      <joint name="shoulder" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0.1" size="0.05" mass="1.3" contype="0" conaffinity="0"/>
+      <body name="fore" pos="0.3 0 0.1" gravcomp=")" + gc + R"(">
+        <joint name="elbow" axis="1 0 0" actuatorgravcomp="true"/>
+        <geom type="box" pos="0.1 0.05 0" size="0.1 0.03 0.02" mass="0.7" contype="0" conaffinity="0"/>
+        <body name="tool" pos="0.2 0 0" gravcomp=")" + gc + R"(">
+          <geom type="sphere" pos="0 0.04 0" size="0.03" mass="0.2" contype="0" conaffinity="0"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>)");
+    const mj::LoadedModel loaded = mj::load_model_translated(path);
+    const mjModel* m = loaded.model.get();
+    EXPECT_EQ(mj::body_gravcomp(m), (std::vector<double>{0, c, c, c}));
+    expect_one_notice(loaded, "gravcomp on 3 bodies (<body> 'upper', line 3, …) applied as MuJoCo >= 2.3");
+    expect_one_notice(loaded, "actuatorgravcomp (<joint> 'elbow', line 7) is the same force without actuatorfrcrange");
+    const mj::DataPtr d = mj::make_data(m);
+    d->qpos[0] = 0.7;
+    d->qpos[1] = -1.1;
+    mj_forward(m, d.get());
+    for (int i = 0; i < m->nv; ++i) {
+      EXPECT_NEAR(d->qfrc_passive[i], c * d->qfrc_bias[i], 1e-12) << "dof " << i << ", gravcomp " << c;
+    }
+    EXPECT_GT(std::abs(d->qfrc_bias[0]), 1.0);
+  }
 }
 
 TEST_F(MjcfTranslate, NoOpValuesAreDroppedAndSaidSo) {

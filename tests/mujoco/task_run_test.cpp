@@ -259,6 +259,28 @@ TEST(TaskRun, AutoOrientationWeightFollowsWhatTheArmCanHold) {
             "task file 't.json', 'target', 'weights': field 'orientation': expected a number or \"auto\", got \"some\"");
 }
 
+// a planar arm's circle lies in the plane it moves in, with or without "facing" (arm4 moves in
+// x–z; at q = 0 its tip is on the world's vertical axis), and runs counter-clockwise as the
+// automatic camera sees that plane, from −y: from the start it heads for −x
+TEST(TaskRun, APlanarArmsCircleLiesInItsPlaneAndRunsCounterClockwiseOnCamera) {
+  for (const std::string& normal : {std::string(), std::string(R"(, "normal": "facing")")}) {
+    const mj::TaskRun run(task_in_mjcf(R"({"model": "arm4.xml", "q0": [0, 0, 0, 0], "qref": 0, "duration": 0.01,
+        "target": {"frame": "link3"}, "reference": {"shape": "circle", "radius": 0.1, "frequency": 0.5,
+        "ramp": 0)" + normal + "}}"));
+    ASSERT_TRUE(run.reference());
+    VecX<double> p0(3), p(3), rate(3);
+    run.reference()->sample(0.0, p0, rate);
+    EXPECT_NEAR(p0[0], 0.0, 1e-12) << "the start is on the vertical axis";
+    for (const double t : {0.1, 0.5, 1.0, 1.5}) {
+      run.reference()->sample(t, p, rate);
+      EXPECT_NEAR(p[1], p0[1], 1e-12) << "t = " << t << normal;
+      EXPECT_NEAR((p - p0).norm(), 2 * 0.1 * std::sin(M_PI * 0.5 * t), 1e-9) << "t = " << t << normal;
+    }
+    run.reference()->sample(0.1, p, rate);
+    EXPECT_LT(p[0], p0[0] - 1e-3) << normal;
+  }
+}
+
 // Without a frame target a reference moves the joint target: from home to a pose in 1 s
 // (minimum jerk), the arm following it and at rest on its end; the horizon's stages see the
 // reference at their own times

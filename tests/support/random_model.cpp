@@ -81,6 +81,7 @@ struct Body {
   Vec3 pos{};
   Quat quat{1, 0, 0, 0};
   double mass = 1;
+  double gravcomp = 0;
   Vec3 ipos{};
   Quat iquat{1, 0, 0, 0};
   Vec3 inertia{};
@@ -149,7 +150,7 @@ struct Writer {
     const Body& b = bodies[id];
     const std::string pad(static_cast<std::size_t>(2 * depth), ' ');
     out += pad + "<body name=\"b" + std::to_string(id) + "\" pos=\"" + nums(b.pos) + "\" quat=\"" +
-           nums(b.quat) + "\">\n";
+           nums(b.quat) + "\"" + (b.gravcomp != 0 ? " gravcomp=\"" + num(b.gravcomp) + "\"" : "") + ">\n";
     for (std::size_t j = 0; j < b.joints.size(); ++j) {
       const Joint& jt = b.joints[j];
       out += pad + "  <joint name=\"" + joint_name(id, j) + "\" type=\"" +
@@ -293,6 +294,15 @@ std::string random_tree_mjcf(unsigned seed, const RandomTreeOptions& options) {
     leaf_parents = body_of;
   }
 
+  if (options.gravcomp) {
+    Rng extra(seed + 7919u);
+    for (Body& b : bodies) {
+      if (extra.chance(0.5)) b.gravcomp = extra.chance(0.3) ? 1.0 : extra.uniform(0.05, 1.5);
+    }
+    if (std::all_of(bodies.begin(), bodies.end(), [](const Body& b) { return b.gravcomp == 0; })) {
+      bodies.back().gravcomp = 0.5;
+    }
+  }
   Writer w{bodies, {}};
   w.out += "<mujoco model=\"random_tree_" + std::to_string(seed) + "\">\n";
   w.out += "  <compiler angle=\"radian\" inertiafromgeom=\"false\"/>\n";

@@ -14,6 +14,9 @@ struct RandomTreeOptions {
   /// every joint axis ±e_k (the drawn axis's largest component, with its sign), for the joint
   /// kernels' axis-aligned paths; the same draws as without
   bool aligned_axes = false;
+  /// MuJoCo >= 2.3's body gravcomp on some bodies (about half: 1 now and then, else in
+  /// (0, 1.5)), drawn from a stream of its own, so that the tree is the one drawn without it
+  bool gravcomp = false;
 };
 
 /// @brief MJCF text of a random fixed-base kinematic tree, identical for a given seed on every

@@ -18,8 +18,11 @@ template <typename S, typename Q, typename Vv, typename T>
   IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea() | DataParts::aba()), "aba: data was made without its rnea and aba parts");
   IDMPC_CHECK_ARGUMENT(q.size() == model.n && v.size() == model.n && tau.size() == model.n,
                     "aba: q, v, tau must have size model.n");
+  IDMPC_CHECK_ARGUMENT(!model.gravcomp || data.Ag.size() == static_cast<std::size_t>(model.n),
+                       "aba: data was made for a model without gravity compensation");
   data.passes.aba(q, v);
   const int n = model.n;
+  const Vec6<S> a0 = base_acceleration<S>(model);
   // pass 1: velocities, velocity-product accelerations, rigid-body inertias and bias forces
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
@@ -35,6 +38,11 @@ template <typename S, typename Q, typename Vv, typename T>
     const Inertia<S> Ii = cast_inertia<S>(model.I[i]);
     data.IA[i] = Ii.matrix();
     data.pA[i] = cross_force<S>(data.V[i], Ii.apply(data.V[i]));
+    if (model.gravcomp) {
+      // the compensation's upward force is an external force on the link
+      data.Ag[i] = X.apply_motion(p < 0 ? a0 : data.Ag[p]);
+      data.pA[i] -= cast_inertia<S>(model.I_gravcomp[i]).apply(data.Ag[i]);
+    }
   }
   // pass 2: articulated inertias and bias forces, leaves first
   for (int i = n - 1; i >= 0; --i) {
@@ -53,7 +61,6 @@ template <typename S, typename Q, typename Vv, typename T>
     }
   }
   // pass 3: accelerations, root first
-  const Vec6<S> a0 = base_acceleration<S>(model);
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
     const Vec6<S> ap = data.X_up[i].apply_motion(p < 0 ? a0 : data.A[p]) + data.c[i];

@@ -22,6 +22,13 @@ template <typename S, typename Q, typename Vv, typename Aa>
   }
 }
 
+// the weight that gravity compensation carries, off link i's body force: F_i −= I_gravcomp,i·Ag_i
+// (Ag_i = X_{i,0}·a0 = −g in link i's frame; an upward force c_b·m_b·g at each body's centre
+// of mass)
+template <typename S> void subtract_gravcomp(const Model& model, DataTpl<S>& data, int i) {
+  data.F[i] -= cast_inertia<S>(model.I_gravcomp[i]).apply(data.Ag[i]);
+}
+
 }  // namespace detail
 
 /// @brief Inverse dynamics τ = ID(q, v, a); q, v, a of size n. Fills data.X_up, V, A, h, vJ
@@ -33,6 +40,8 @@ template <typename S, typename Q, typename Vv, typename Aa>
   IDMPC_CHECK_ARGUMENT(data.parts.has(DataParts::rnea()), "rnea: data was made without its rnea part");
   IDMPC_CHECK_ARGUMENT(q.size() == model.n && v.size() == model.n && a.size() == model.n,
                     "rnea: q, v, a must have size model.n");
+  IDMPC_CHECK_ARGUMENT(!model.gravcomp || data.Ag.size() == static_cast<std::size_t>(model.n),
+                       "rnea: data was made for a model without gravity compensation");
   data.passes.rnea(q);
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass: link velocities, accelerations and body forces
@@ -52,6 +61,10 @@ template <typename S, typename Q, typename Vv, typename Aa>
     const auto& Ii = cast_inertia<S>(model.I[i]);
     data.h[i] = Ii.apply(data.V[i]);
     data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
+    if (model.gravcomp) {
+      data.Ag[i] = data.X_up[i].apply_motion(p < 0 ? a0 : data.Ag[p]);
+      detail::subtract_gravcomp(model, data, i);
+    }
   }
   detail::rnea_backward(model, data, q, v, a);
   return data.tau;
@@ -79,6 +92,7 @@ template <typename S, typename Q, typename Vv>
     const auto& Ii = cast_inertia<S>(model.I[i]);
     data.h[i] = Ii.apply(data.V[i]);
     data.F[i] = Ii.apply(data.A[i]) + cross_force<S>(data.V[i], data.h[i]);
+    if (model.gravcomp) detail::subtract_gravcomp(model, data, i);
   }
   detail::rnea_backward(model, data, q, v, data.qdd);
   return data.tau;

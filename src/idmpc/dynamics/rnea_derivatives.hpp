@@ -11,7 +11,9 @@
 ///                            ∂τ_i/∂v_j = (Bc_iᵀ S_i)·S_j − 2 (Ic_i S_i)·w_j
 ///   j descendant of i:       ∂τ_i/∂q_j = S_i·(−Ic_j ψ_j − Bc_j w_j + S_j ×* F_j)
 ///                            ∂τ_i/∂v_j = S_i·(Bc_j S_j − 2 Ic_j w_j)
-/// plus stiffness, damping and armature on the diagonals.
+/// plus stiffness, damping and armature on the diagonals. Gravity compensation (the composite
+/// compensated inertias Ig_i, at rest, with ψg_j = S_j × a0) adds (Ig_i S_i)·ψg_j to the first
+/// line and S_i·(Ig_j ψg_j) to the third, and takes Ig_j·a0 off F_j.
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/model/joint.hpp"
@@ -48,7 +50,10 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
                     "rnea_derivatives: q, v, a must have size model.n");
   if constexpr (kJointTransforms) data.passes.kinematics(q);
   data.passes.mass_matrix();
+  IDMPC_CHECK_ARGUMENT(!model.gravcomp || data.oIg.size() == static_cast<std::size_t>(model.n),
+                       "rnea_derivatives: data was made for a model without gravity compensation");
   const int n = model.n;
+  const bool gravcomp = model.gravcomp;
   const Vec6<S> a0 = base_acceleration<S>(model);
   // forward pass in the world frame: placements, axes, velocities, accelerations, forces
   for (int i = 0; i < n; ++i) {
@@ -63,6 +68,10 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
     const Vec6<S> h = data.oI[i].apply(data.oV[i]);
     data.oF[i] = data.oI[i].apply(data.oA[i]) + cross_force<S>(data.oV[i], h);
     data.oB[i] = coriolis_matrix<S>(data.oI[i], data.oV[i], h);
+    if (gravcomp) {
+      data.oIg[i] = cast_inertia<S>(model.I_gravcomp[i]).transformed_to_parent(data.oX[i]);
+      data.oF[i] -= data.oIg[i].apply(a0);
+    }
   }
   // backward pass: composite inertias, Coriolis matrices and subtree forces
   for (int i = n - 1; i >= 0; --i) {
@@ -71,6 +80,7 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
       data.oI[p] += data.oI[i];
       data.oB[p] += data.oB[i];
       data.oF[p] += data.oF[i];
+      if (gravcomp) data.oIg[p] += data.oIg[i];
     }
   }
   // per joint: the vectors the pairwise products need
@@ -86,6 +96,13 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
     data.G[j] = -data.oI[j].apply(data.psi[j]) - data.oB[j] * data.w[j] +
                 cross_force<S>(Sj, data.oF[j]);
     data.H[j] = data.oB[j] * Sj - S(2) * data.oI[j].apply(data.w[j]);
+    if (gravcomp) {
+      // minus the derivatives of the compensated gravity torques, those of a model with the
+      // composite inertias oIg, at rest: ψ_j becomes S_j × a0, w_j and B vanish
+      data.psig[j] = cross_motion<S>(Sj, a0);
+      data.IgS[j] = data.oIg[j].apply(Sj);
+      data.G[j] += data.oIg[j].apply(data.psig[j]);
+    }
     data.tau[j] =
         Sj.dot(data.oF[j]) + armature_and_passive<S>(model, j, S(q[j]), S(v[j]), S(a[j]));
   }
@@ -95,6 +112,7 @@ template <bool kJointTransforms, typename S, typename Q, typename Vv, typename A
   for (int i = 0; i < n; ++i) {
     for (int j = i; j >= 0; j = model.parent[j]) {
       data.dtau_dq(i, j) = -data.IcS[i].dot(data.psi[j]) - data.BcS[i].dot(data.w[j]);
+      if (gravcomp) data.dtau_dq(i, j) += data.IgS[i].dot(data.psig[j]);
       data.dtau_dv(i, j) = data.BcS[i].dot(data.oS[j]) - S(2) * data.IcS[i].dot(data.w[j]);
       data.M(i, j) = data.M(j, i) = data.IcS[i].dot(data.oS[j]);
       if (j != i) {

@@ -10,6 +10,8 @@
 ///   ā_i += I_i f̄_i;   v̄_i += −f̄_i ×* h_i − I_i (v_i × f̄_i) + (S_i q̇_i) ×* ā_i
 ///   (∂τ/∂a)ᵀw = Sᵀā,  (∂τ/∂v)ᵀw = Sᵀv̄ + ā·(v × S),
 ///   (∂τ/∂q)ᵀw = (f̄ × S)·F_i + ā·((X a_λ) × S) + v̄·((X v_λ) × S).
+/// Gravity compensation, f_i −= Ig_i Ag_i with Ag_i = X_i Ag_λ (rnea.hpp), adds its own adjoint
+/// ḡ_i = −Ig_i f̄_i + Σ_children X_cᵀ ḡ_c and the term ḡ_i·(Ag_i × S_i) to (∂τ/∂q)ᵀw.
 
 #include "idmpc/model/data.hpp"
 #include "idmpc/model/joint.hpp"
@@ -27,7 +29,10 @@ template <typename S, typename W>
   IDMPC_DEBUG_CHECK(data.passes.holds_rnea(),
                     "rnea_vjp needs rnea(model, data, q, v, a) at the point of linearization "
                     "first, and no aba or algorithm at another q since");
+  IDMPC_CHECK_ARGUMENT(!model.gravcomp || data.gbar.size() == static_cast<std::size_t>(model.n),
+                       "rnea_vjp: data was made for a model without gravity compensation");
   const int n = model.n;
+  const bool gravcomp = model.gravcomp;
   // adjoint of the backward pass: force adjoints propagate root to leaves like velocities
   for (int i = 0; i < n; ++i) {
     const int p = model.parent[i];
@@ -37,6 +42,7 @@ template <typename S, typename W>
     data.g_q[i] = cross_motion<S>(data.fbar[i], Si).dot(data.F[i]);
     data.abar[i].setZero();
     data.vbar[i].setZero();
+    if (gravcomp) data.gbar[i].setZero();
   }
   // adjoint of the forward pass: leaves to root
   for (int i = n - 1; i >= 0; --i) {
@@ -58,6 +64,12 @@ template <typename S, typename W>
     // equals (a_i − v_i × S_i q̇_i) × S_i since S_i × S_i = 0
     const Vec6<S> Xa = data.A[i] - cross_motion<S>(data.V[i], data.vJ[i]);
     data.g_q[i] += data.abar[i].dot(cross_motion<S>(Xa, Si)) + d.dq * w[i];
+    if (gravcomp) {
+      // f_i −= Ig_i Ag_i with Ag_i = X_i Ag_λ: its adjoint, through X_i like the acceleration's
+      data.gbar[i] -= cast_inertia<S>(model.I_gravcomp[i]).apply(data.fbar[i]);
+      data.g_q[i] += data.gbar[i].dot(cross_motion<S>(data.Ag[i], Si));
+      if (p >= 0) data.gbar[p] += data.X_up[i].apply_transpose_force(data.gbar[i]);
+    }
     if (p >= 0) {
       data.g_q[i] += data.vbar[i].dot(cross_motion<S>(Vec6<S>(data.V[i] - data.vJ[i]), Si));
       data.abar[p] += data.X_up[i].apply_transpose_force(data.abar[i]);

@@ -109,7 +109,8 @@ std::string numbers(int n, const char* what) {
 // below this a direction counts as zero (a normal along z, a start at the centre)
 constexpr double kDegenerate = 1e-9;
 
-std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start) {
+std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start,
+                                   const std::optional<Vec3<double>>& plane_normal) {
   f.known({"shape", "radius", "frequency", "normal", "ramp", "center"}, "circle");
   if (start.size() != 3) {
     throw std::invalid_argument(f.where + ": field 'shape': \"circle\" needs a 3-D reference (a position), got dim " +
@@ -124,8 +125,10 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start) {
   const double ramp = f.number("ramp", ramp_expected, false, 1.0);
   if (!(ramp >= 0) || ramp > CircleTrajectory::kMaxRamp) f.bad("ramp", ramp_expected);
   if (!std::isfinite(2 * M_PI * freq * r)) f.bad("radius", "a radius whose speed 2 pi frequency radius is finite [m]");
-  Vec3<double> n = Vec3<double>::UnitX();
-  if (f.j.contains("normal") && f.j.at("normal") == "facing") {
+  Vec3<double> n = plane_normal ? plane_normal->normalized() : Vec3<double>::UnitX();
+  if (f.j.contains("normal") && f.j.at("normal") == "facing" && plane_normal) {
+    // the plane the arm moves in is the one plane that faces it
+  } else if (f.j.contains("normal") && f.j.at("normal") == "facing") {
     // a vertical plane facing the base at the world origin: the normal along the start's
     // horizontal direction from it
     n = Vec3<double>(start[0], start[1], 0.0);
@@ -305,14 +308,15 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
 namespace {
 
 std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, const VecX<double>& start,
-                                     const std::string& base_dir);
+                                     const std::string& base_dir, const std::optional<Vec3<double>>& plane_normal);
 
 }  // namespace
 
 std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::string& where, const VecX<double>& start,
-                                                 const std::string& base_dir) {
+                                                 const std::string& base_dir,
+                                                 const std::optional<Vec3<double>>& plane_normal) {
   try {
-    return shape_of(j, where, start, base_dir);
+    return shape_of(j, where, start, base_dir, plane_normal);
   } catch (const std::invalid_argument& e) {
     // the trajectories' own checks name neither the file nor the field: prefixed once
     const std::string what = e.what();
@@ -324,7 +328,7 @@ std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::strin
 namespace {
 
 std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, const VecX<double>& start,
-                                     const std::string& base_dir) {
+                                     const std::string& base_dir, const std::optional<Vec3<double>>& plane_normal) {
   if (start.size() < 1) throw std::invalid_argument(where + ": the reference's start value is empty (dim 0)");
   if (!start.allFinite()) throw std::invalid_argument(where + ": the reference's start value is not finite");
   if (!j.is_object()) {
@@ -335,7 +339,7 @@ std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, co
   const char* shapes = "\"circle\", \"line\", \"waypoints\" or \"csv\"";
   if (!j.contains("shape")) f.missing("shape", shapes);
   const json& shape = j.at("shape");
-  if (shape == "circle") return circle(f, start);
+  if (shape == "circle") return circle(f, start, plane_normal);
   if (shape == "line") return line(f, start);
   if (shape == "waypoints") return waypoints(f, start);
   if (shape == "csv") return csv(f, start, base_dir);

@@ -4,6 +4,7 @@
 /// a task file (docs/tasks.md) describing a circle, a line, waypoints or a CSV file.
 
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -26,7 +27,12 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim);
 /// names the source in messages (e.g. "task 'a.json' field 'reference'"); a "csv" file is found
 /// relative to `base_dir`. Throws std::invalid_argument with one line naming `where` and the
 /// field, also for an unknown field or a value of the wrong dimension.
+///
+/// `plane_normal`, when given, is the normal of the only plane the reference can move in (a
+/// planar arm's end effector): a circle without `normal`, or with `"normal": "facing"`, lies in
+/// that plane.
 std::unique_ptr<Trajectory> trajectory_from_json(const nlohmann::json& j, const std::string& where,
-                                                 const VecX<double>& start, const std::string& base_dir);
+                                                 const VecX<double>& start, const std::string& base_dir,
+                                                 const std::optional<Vec3<double>>& plane_normal = std::nullopt);
 
 }  // namespace idmpc

@@ -157,6 +157,10 @@ template <typename S> struct DataTpl {
         rhs(mat(P::minv_columns())), Ud_parent(list<Vec6<S>>(P::minv_apply())),
         Lt(mat(P::ltdl())), Dl(vec(P::ltdl())), Dlinv(vec(P::ltdl())), y_ltdl(vec(P::ltdl())),
         Fc(SpatialSet<S>::Zero(6, cols(P::crba()))),
+        Ag(gravcomp_list<Vec6<S>>(model, P::rnea())), gbar(gravcomp_list<Vec6<S>>(model, P::rnea_vjp())),
+        oIg(gravcomp_list<Inertia<S>>(model, P::rnea_derivatives())),
+        IgS(gravcomp_list<Vec6<S>>(model, P::rnea_derivatives())),
+        psig(gravcomp_list<Vec6<S>>(model, P::rnea_derivatives())),
         passes(n) {}
 
   int n;
@@ -224,6 +228,14 @@ template <typename S> struct DataTpl {
   // CRBA's force set: column t holds Ic_j·S_j of link j = model.preorder[t] (crba.hpp)
   SpatialSet<S> Fc;
 
+  // gravity compensation, allocated only for a model with model.gravcomp (after the buffers
+  // above, which keep their places): Ag[i] = X_{i,0}·a0, the base acceleration −g in link i's
+  // frame (rnea, aba); gbar its adjoint (rnea_vjp); oIg the compensated inertias in the world
+  // frame, then composite, IgS = oIg_i·S_i and psig_j = S_j × a0 (rnea_derivatives)
+  List<Vec6<S>> Ag, gbar;
+  List<Inertia<S>> oIg;
+  List<Vec6<S>> IgS, psig;
+
   /// what the buffers above hold (debug builds)
   PassRecord<S> passes;
 
@@ -232,6 +244,9 @@ template <typename S> struct DataTpl {
   // n of a buffer in one of the parts p, else 0
   int cols(DataParts p) const { return parts.any(p) ? n : 0; }
   template <typename T> List<T> list(DataParts p) const { return List<T>(static_cast<size_t>(cols(p))); }
+  template <typename T> List<T> gravcomp_list(const Model& model, DataParts p) const {
+    return model.gravcomp ? list<T>(p) : List<T>();
+  }
   VecX<S> vec(DataParts p) const { return VecX<S>::Zero(cols(p)); }
   MatX<S> mat(DataParts p) const { return MatX<S>::Zero(cols(p), cols(p)); }
 };
@@ -257,7 +272,8 @@ template <typename S> std::size_t heap_bytes(const DataTpl<S>& d) {
   all(d.X_up, d.V, d.A, d.F, d.h, d.vJ, d.tau, d.qdd, d.IA, d.pA, d.U, d.c, d.Ud, d.D, d.Dinv, d.u, d.Ic, d.M,
       d.oX, d.oS, d.oV, d.oA, d.oI, d.oB, d.oF, d.IcS, d.BcS, d.psi, d.w, d.G, d.H, d.dtau_dq, d.dtau_dv, d.Minv,
       d.da_dq, d.da_dv, d.fbar, d.abar, d.vbar, d.g_q, d.g_v, d.g_a, d.pz, d.az, d.Minv_x, d.oYA, d.oUD, d.oDinv,
-      d.Pm, d.Am, d.Tm, d.Wm, d.rhs, d.Ud_parent, d.Lt, d.Dl, d.Dlinv, d.y_ltdl, d.Fc);
+      d.Pm, d.Am, d.Tm, d.Wm, d.rhs, d.Ud_parent, d.Lt, d.Dl, d.Dlinv, d.y_ltdl, d.Fc, d.Ag, d.gbar,
+      d.oIg, d.IgS, d.psig);
   return b + 4 * static_cast<std::size_t>(d.n) * sizeof(S);  // the pass record's four points
 }
 

@@ -44,6 +44,9 @@ int checked_size(const std::vector<Link>& links, const Vec3<double>& gravity,
     if (!std::isfinite(l.I.m) || !l.I.h.allFinite() || !l.I.Ibar.allFinite() || l.I.m < 0) {
       fail("inertia must be finite with mass >= 0, got mass " + std::to_string(l.I.m));
     }
+    if (!std::isfinite(l.I_gravcomp.m) || !l.I_gravcomp.h.allFinite() || !l.I_gravcomp.Ibar.allFinite()) {
+      fail("gravity-compensated inertia must be finite, got mass " + std::to_string(l.I_gravcomp.m));
+    }
     for (double x : {l.q_ref, l.armature, l.damping, l.stiffness, l.q_spring, l.friction, l.friction_velocity}) {
       if (!std::isfinite(x)) fail("q_ref, armature, damping, stiffness, q_spring and friction must be finite");
     }
@@ -126,6 +129,13 @@ std::vector<int> joints_where(const std::vector<Link>& links, bool actuated) {
   return out;
 }
 
+bool any_gravcomp(const std::vector<Link>& links, const Vec3<double>& gravity) {
+  if (gravity.isZero(0)) return false;
+  return std::any_of(links.begin(), links.end(), [](const Link& l) {
+    return l.I_gravcomp.m != 0 || !l.I_gravcomp.h.isZero(0);
+  });
+}
+
 std::vector<int> run_starts(const std::vector<Link>& links) {
   std::vector<int> out(links.size());
   for (size_t i = 0; i < links.size(); ++i) {
@@ -144,6 +154,7 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       axis(gather(links, &Link::axis)),
       X_tree(gather(links, &Link::X_tree)),
       I(gather(links, &Link::I)),
+      I_gravcomp(gather(links, &Link::I_gravcomp)),
       q_ref(gather_vector(links, &Link::q_ref)),
       armature(gather_vector(links, &Link::armature)),
       damping(gather_vector(links, &Link::damping)),
@@ -152,6 +163,7 @@ Model::Model(const std::vector<Link>& links, const Vec3<double>& world_gravity,
       friction(gather_vector(links, &Link::friction)),
       friction_velocity(gather_vector(links, &Link::friction_velocity)),
       gravity(world_gravity),
+      gravcomp(any_gravcomp(links, world_gravity)),
       actuated_joints(joints_where(links, true)),
       unactuated_joints(joints_where(links, false)),
       joint_names(gather(links, &Link::joint_name)),
@@ -169,6 +181,7 @@ Link Model::link(int i) const {
   l.axis = axis[i];
   l.X_tree = X_tree[i];
   l.I = I[i];
+  l.I_gravcomp = I_gravcomp[i];
   l.q_ref = q_ref[i];
   l.armature = armature[i];
   l.damping = damping[i];

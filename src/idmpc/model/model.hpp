@@ -23,6 +23,10 @@ struct Link {
   Vec3<double> axis = Vec3<double>::UnitZ();  ///< unit joint axis in the link frame
   Transform<double> X_tree;                   ///< parent link frame → link frame at q = q_ref
   Inertia<double> I;                          ///< link inertia (welded bodies merged)
+  /// the part of I whose weight gravity compensation carries, Σ c_b·I_b over the link's bodies
+  /// with gravcomp c_b (MuJoCo's body gravcomp): an upward force c_b·m_b·g at each body's centre
+  /// of mass. Only its mass and first moment act. Zero: no compensation.
+  Inertia<double> I_gravcomp;
   double q_ref = 0;                           ///< joint reference (MuJoCo qpos0)
   double armature = 0;                        ///< added to diag(M)
   double damping = 0;                         ///< passive −d·v
@@ -58,6 +62,7 @@ class Model {
                                                ///< joint_type, the motion subspace S (joint.hpp)
   const std::vector<Transform<double>> X_tree; ///< parent link frame → link frame at q = q_ref
   const std::vector<Inertia<double>> I;        ///< link inertia (welded bodies merged)
+  const std::vector<Inertia<double>> I_gravcomp;  ///< the compensated part of I (Link::I_gravcomp)
   const VecX<double> q_ref;                    ///< joint reference (MuJoCo qpos0)
   const VecX<double> armature;                 ///< added to diag(M)
   const VecX<double> damping;                  ///< passive −d·v
@@ -66,6 +71,9 @@ class Model {
   const VecX<double> friction;                 ///< friction loss f: passive −f·tanh(v/ε)
   const VecX<double> friction_velocity;        ///< ε of the smooth friction (joint.hpp)
   const Vec3<double> gravity;                  ///< world gravity (zero if disabled)
+  /// some link's weight is (partly) compensated and gravity is not zero: the algorithms then
+  /// take I_gravcomp·X_{i,0}g off each link's body force (formulations.md §Gravity compensation)
+  const bool gravcomp;
   /// the joints an actuator drives and those none does (under-actuation), increasing; the
   /// actuators' torques u (size actuated_joints.size()) reach the joints as τ = Sᵀu, S the
   /// selection of the actuated rows

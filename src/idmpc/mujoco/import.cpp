@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "idmpc/experiment/input_file.hpp"
+#include "idmpc/mujoco/gravcomp.hpp"
 #include "idmpc/mujoco/load.hpp"
 
 namespace idmpc::mj {
@@ -522,10 +523,16 @@ ImportedModel import_model(const mjModel* m, const std::string& source, const Im
     l.stiffness = passive ? m->jnt_stiffness[j] : 0.0;
     l.q_spring = m->qpos_spring[m->jnt_qposadr[j]];
   }
-  // welded bodies merge into the link they hang from; those on the base carry nothing
+  // welded bodies merge into the link they hang from; those on the base carry nothing. The
+  // compensated part of each, gravcomp·inertia, merges alike (a passive force: none without them)
+  const std::vector<double> gravcomp = body_gravcomp(m);
   for (int b = 1; b < m->nbody; ++b) {
     const int link = tree.link_of_body[b];
-    if (link >= 0) links[link].I += body_inertia(m, b).transformed_to_parent(tree.body_in_link[b]);
+    if (link < 0) continue;
+    const Inertia<double> I = body_inertia(m, b).transformed_to_parent(tree.body_in_link[b]);
+    links[link].I += I;
+    const double c = passive ? gravcomp[static_cast<std::size_t>(b)] : 0.0;
+    if (c != 0) links[link].I_gravcomp += Inertia<double>{c * I.m, c * I.h, c * I.Ibar};
   }
   const Vec3<double> gravity = (m->opt.disableflags & mjDSBL_GRAVITY) ? Vec3<double>::Zero()
                                                                       : vec3(m->opt.gravity);

@@ -1,5 +1,6 @@
 #include "idmpc/mujoco/load.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,7 @@
 #include <unistd.h>
 
 #include "idmpc/experiment/input_file.hpp"
+#include "idmpc/mujoco/gravcomp.hpp"
 #include "idmpc/mujoco/mjcf_scan.hpp"
 #include "idmpc/mujoco/mjcf_translate.hpp"
 
@@ -160,6 +162,7 @@ void install_error_handlers() {
     mju_user_error = throw_error;
     mju_user_warning = collect_warning;
   });
+  install_gravcomp_callback();
 }
 
 std::vector<std::string> take_warnings() {
@@ -169,12 +172,51 @@ std::vector<std::string> take_warnings() {
   return out;
 }
 
+namespace {
+
+// a few words naming what one translation did, for the one-line notice
+std::string translation_kind(const std::string& text) {
+  static const std::vector<std::pair<std::string, std::string>> kinds = {
+      {"<compiler autolimits>", "autolimits"},
+      {"integrator implicitfast", "implicitfast as implicit"},
+      {"keyframe", "keyframe blanks"},
+      {"gravcomp on", "gravcomp"},
+      {"inheritrange", "inheritrange"},
+      {"kv ", "kv"},
+      {"dampratio", "dampratio"},
+      {"actuatorfrcrange", "actuatorfrcrange"},
+      {"assetdir", "assetdir"},
+      {"only rendering uses", "render-only attributes dropped"},
+      {"\" dropped (", "no-op values dropped"}};
+  for (const auto& [needle, kind] : kinds) {
+    if (text.find(needle) != std::string::npos) return kind;
+  }
+  const std::string head = text.substr(0, text.find(" ("));
+  return head.size() > 40 ? head.substr(0, 40) + "…" : head;
+}
+
+}  // namespace
+
 std::string LoadedModel::notice() const {
   if (translations.empty()) return "";
-  std::string out = "model '" + source + "' is written for a newer MuJoCo; translated in memory for MuJoCo " +
-                    mj_versionString() + " (the file is unchanged): ";
-  for (std::size_t k = 0; k < translations.size(); ++k) out += (k ? "; " : "") + translations[k];
-  return out;
+  std::vector<std::pair<std::string, int>> kinds;  // in order of first appearance
+  for (const std::string& t : translations) {
+    const std::string kind = translation_kind(t);
+    const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == kind; });
+    if (it == kinds.end()) {
+      kinds.emplace_back(kind, 1);
+    } else {
+      ++it->second;
+    }
+  }
+  std::string list;
+  for (const auto& [kind, count] : kinds) {
+    list += (list.empty() ? "" : ", ") + kind + (count > 1 ? " ×" + std::to_string(count) : "");
+  }
+  const std::size_t n = translations.size();
+  return "model '" + source + "' is written for a newer MuJoCo; translated in memory for MuJoCo " +
+         mj_versionString() + " (the file is unchanged): " + std::to_string(n) + (n == 1 ? " change (" : " changes (") +
+         list + "), each listed by 'idmpc check'";
 }
 
 LoadedModel load_model_translated(const std::string& path) {

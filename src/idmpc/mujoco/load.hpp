@@ -20,7 +20,8 @@ using ModelPtr = std::unique_ptr<mjModel, ModelDeleter>;
 using DataPtr = std::unique_ptr<mjData, DataDeleter>;
 
 /// @brief Installs handlers so that a MuJoCo error throws std::runtime_error (instead of
-/// exiting) and MuJoCo warnings are collected. Idempotent, thread-safe.
+/// exiting) and MuJoCo warnings are collected, and the passive-force callback that applies
+/// gravity compensation (gravcomp.hpp). Idempotent, thread-safe.
 void install_error_handlers();
 
 /// @brief Warnings MuJoCo raised through mju_warning since the last call (then cleared).
@@ -34,7 +35,8 @@ struct LoadedModel {
   /// Torque range per joint (mjModel joint index) that the file declares with actuatorfrcrange on
   /// a joint no actuator drives; ±infinity elsewhere (njnt entries each).
   std::vector<double> joint_force_lower, joint_force_upper;
-  /// @brief One notice listing every translation ("" if none), for the user.
+  /// @brief One short line that names the kinds of translation made, with their counts ("" if
+  /// none); `translations` holds each in full (idmpc check prints them).
   std::string notice() const;
 };
 

@@ -14,6 +14,8 @@
 
 #include <tinyxml2.h>
 
+#include "idmpc/mujoco/gravcomp.hpp"
+
 namespace idmpc::mj {
 namespace {
 
@@ -446,13 +448,26 @@ class Translator {
   void plan_joints() {
     for (std::size_t j = 0; j < joints_.size(); ++j) {
       const Node* n = joints_[j];
-      const auto range = resolve(n, {"joint"}, "actuatorfrcrange");
-      if (!range) continue;
-      const auto flag = resolve(n, {"joint"}, "actuatorfrclimited");
-      const bool limited = flag ? flag->first == "true" : autolimits_on();
-      const std::vector<double> v = numbers(range->first);
-      if (!limited || v.size() != 2) continue;
-      out_.joints.push_back(JointForcePatch{static_cast<int>(j), model_.where(n), v[0], v[1]});
+      bool force_range = false;
+      if (const auto range = resolve(n, {"joint"}, "actuatorfrcrange")) {
+        const auto flag = resolve(n, {"joint"}, "actuatorfrclimited");
+        const bool limited = flag ? flag->first == "true" : autolimits_on();
+        const std::vector<double> v = numbers(range->first);
+        force_range = limited && v.size() == 2;
+        if (force_range) out_.joints.push_back(JointForcePatch{static_cast<int>(j), model_.where(n), v[0], v[1]});
+      }
+      // through the actuators, the compensation differs from the passive one only by the clamp
+      // of actuatorfrcrange, which it then shares with the actuator force
+      const auto through_actuators = resolve(n, {"joint"}, "actuatorgravcomp");
+      if (through_actuators && through_actuators->first == "true") {
+        if (force_range) {
+          untranslatable(n, "actuatorgravcomp",
+                         "with the joint's actuatorfrcrange, the compensation and the actuator force are clamped "
+                         "together, which idmpc does not model (without actuatorfrcrange it is the passive force)");
+        } else {
+          actuator_gravcomp_joints_.push_back(model_.where(n));
+        }
+      }
     }
   }
 
@@ -495,8 +510,10 @@ class Translator {
           remove_attr_.emplace_back(n, name);
           if (name == "type" && value == "directional") set_attr_.push_back({n, "directional", "true"});
           render_only_[tag + " " + name] += 1;
+        } else if (name == "actuatorgravcomp" && tag == "joint" && value == "true") {
+          remove_attr_.emplace_back(n, name);  // decided per joint in plan_joints
         } else if (name == "gravcomp" && tag == "body" && body_id_.count(n) && std::atof(value.c_str()) != 0) {
-          // exact only when it compensates every moving body fully: checked on the compiled model
+          // kept in the compiled model as a custom numeric field (gravcomp.hpp)
           remove_attr_.emplace_back(n, name);
           out_.gravcomp.push_back(GravcompPatch{body_id_.at(n), model_.where(n), std::atof(value.c_str())});
         } else if (const auto it = kNewerAttributes.find(name); it != kNewerAttributes.end()) {
@@ -560,9 +577,37 @@ class Translator {
         n->src->changed = true;
       }
     }
+    if (!out_.gravcomp.empty()) add_gravcomp_field();
     for (const auto& src : model_.sources()) {
       if (src->changed) out_.files.emplace_back(src->path, LinePrinter().print(*src->doc));
     }
+  }
+
+  // each body's gravcomp as the custom numeric field gravcomp.hpp reads, and one notice
+  void add_gravcomp_field() {
+    std::vector<double> value(static_cast<std::size_t>(next_body_), 0.0);
+    for (const GravcompPatch& p : out_.gravcomp) value[static_cast<std::size_t>(p.body)] = p.value;
+    std::ostringstream data;
+    data.precision(17);
+    for (std::size_t b = 0; b < value.size(); ++b) data << (b ? " " : "") << value[b];
+    XMLElement* root = model_.root()->e;
+    XMLElement* custom = root->GetDocument()->NewElement("custom");
+    XMLElement* numeric = root->GetDocument()->NewElement("numeric");
+    numeric->SetAttribute("name", kGravcompField);
+    numeric->SetAttribute("size", next_body_);
+    numeric->SetAttribute("data", data.str().c_str());
+    custom->InsertEndChild(numeric);
+    root->InsertEndChild(custom);
+    model_.root()->src->changed = true;
+    const std::size_t count = out_.gravcomp.size();
+    std::string text = "gravcomp on " + std::to_string(count) + (count == 1 ? " body (" : " bodies (") +
+                       out_.gravcomp.front().where + (count > 1 ? ", …" : "") +
+                       ") applied as MuJoCo >= 2.3 applies it, an upward passive force gravcomp·m·g at the centre of mass";
+    if (!actuator_gravcomp_joints_.empty()) {
+      text += "; actuatorgravcomp (" + actuator_gravcomp_joints_.front() +
+              (actuator_gravcomp_joints_.size() > 1 ? ", …" : "") + ") is the same force without actuatorfrcrange";
+    }
+    out_.notices.push_back(text);
   }
 
   struct Assignment {
@@ -576,6 +621,7 @@ class Translator {
   std::vector<Node*> all_, compilers_, actuators_, tendons_, joints_;
   std::map<const Node*, int> body_id_;
   int next_body_ = 1;
+  std::vector<std::string> actuator_gravcomp_joints_;  // where actuatorgravcomp is the passive force
   std::vector<Assignment> set_attr_;
   std::vector<std::pair<Node*, std::string>> remove_attr_;
   std::vector<Node*> remove_element_;
@@ -600,41 +646,6 @@ std::string range_text(double lo, double hi) { return "[" + number(lo) + ", " + 
 
 }  // namespace
 
-namespace {
-
-// gravcomp = 1 on every body that moves and has mass cancels gravity exactly: the same model with
-// zero gravity. Anything less (some bodies, or a fraction) has no MuJoCo 2.2 equivalent: one gravity
-// acts on every body.
-void apply_gravcomp(mjModel* m, const std::vector<GravcompPatch>& patches, std::vector<std::string>& notices,
-                    std::vector<std::string>& untranslatable) {
-  if (patches.empty()) return;
-  std::vector<double> value(static_cast<std::size_t>(m->nbody), 0.0);
-  for (const GravcompPatch& p : patches) {
-    if (p.body > 0 && p.body < m->nbody) value[static_cast<std::size_t>(p.body)] = p.value;
-  }
-  std::string partial;
-  for (int b = 1; b < m->nbody; ++b) {
-    const bool moves = m->body_weldid[b] != 0, massive = m->body_mass[b] > 0;
-    if (moves && massive && value[static_cast<std::size_t>(b)] != 1) {
-      partial = "body '" + std::string(mj_id2name(m, mjOBJ_BODY, b) ? mj_id2name(m, mjOBJ_BODY, b) : "#" + std::to_string(b)) +
-                "' has gravcomp " + number(value[static_cast<std::size_t>(b)]);
-      break;
-    }
-  }
-  if (!partial.empty()) {
-    for (const GravcompPatch& p : patches) {
-      untranslatable.push_back("attribute 'gravcomp' (" + p.where + "): MuJoCo 2.2 has one gravity for all bodies, "
-                               "so only gravcomp 1 on every moving body has an equivalent (" + partial + ")");
-    }
-    return;
-  }
-  notices.push_back("gravcomp 1 on every moving body (" + patches.front().where + " and " +
-                    std::to_string(patches.size() - 1) +
-                    " more): gravity fully compensated, the same dynamics as gravity 0, which it is set to");
-  mju_zero(m->opt.gravity, 3);
-}
-
-}  // namespace
 
 MjcfTranslation translate_mjcf(const std::string& path) {
   MjcfTranslation out;
@@ -648,7 +659,6 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
                                    std::vector<std::string>& untranslatable) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   JointForceRanges ranges{std::vector<double>(m->njnt, -kInf), std::vector<double>(m->njnt, kInf)};
-  apply_gravcomp(m, t.gravcomp, notices, untranslatable);
   if (t.actuators.empty() && t.joints.empty()) return ranges;
   const int nv = m->nv;
   // actuator moments at qpos0, as MuJoCo's compiler computes them

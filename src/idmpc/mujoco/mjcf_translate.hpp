@@ -16,6 +16,10 @@
 /// - keyframe vectors lose leading and trailing blanks (MuJoCo 2.2 reads a trailing blank as a
 ///   missing number).
 /// - `<compiler assetdir>` becomes meshdir and texturedir where those are not given.
+/// - body `gravcomp` (any value, on any bodies) is kept as one custom numeric field, each body's
+///   value by body index, which MuJoCo 2.2's passive-force callback applies (gravcomp.hpp); a
+///   joint's `actuatorgravcomp="true"` is the same force when the joint has no actuatorfrcrange
+///   (with one, the compensation shares the actuator's clamp: refused).
 /// - no-op values are dropped: `gravcomp="0"`, `actuatorgravcomp="false"`, `actearly="false"`,
 ///   `<flag eulerdamp="enable">` (MuJoCo 2.2's Euler integrator always treats damping
 ///   implicitly); camera `resolution` is dropped too (MuJoCo 2.2 cameras have none, and it

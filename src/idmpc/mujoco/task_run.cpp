@@ -48,6 +48,32 @@ int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<doubl
   return rank;
 }
 
+// the direction the frame's position cannot move in, when its position Jacobian has rank 2 at q
+// and 0.1 rad beside it (a planar arm): the normal of the plane it moves in, signed towards where
+// the automatic camera looks at such a motion from (−y for the x–z plane, −x for y–z, +z, above,
+// for a horizontal plane), so that a circle about it runs counter-clockwise in the video
+std::optional<Vec3<double>> motion_plane_normal(const Model& model, const Frame& frame, const VecX<double>& q) {
+  VecX<double> beside = q;
+  for (int j = 0; j < model.n; ++j) beside[j] += j % 2 ? -0.1 : 0.1;
+  FrameKinematics<double> fk(model, frame);
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.n);
+  MatX<double> Jp(3, 2 * model.n);
+  int k = 0;
+  for (const VecX<double>* at : {&q, static_cast<const VecX<double>*>(&beside)}) {
+    fk.compute(model, *at);
+    fk.jacobian(J);
+    Jp.middleCols(k++ * model.n, model.n) = J.topRows<3>();
+  }
+  const Eigen::JacobiSVD<MatX<double>> svd(Jp, Eigen::ComputeFullU);
+  const VecX<double>& sigma = svd.singularValues();
+  if (!(sigma[0] > 0) || sigma[1] <= 1e-6 * sigma[0] || sigma[2] > 1e-6 * sigma[0]) return std::nullopt;
+  Vec3<double> n = svd.matrixU().col(2);
+  Eigen::Index axis = 0;
+  n.cwiseAbs().maxCoeff(&axis);
+  const double towards_camera = axis == 2 ? n[2] : -n[axis];
+  return towards_camera < 0 ? Vec3<double>(-n) : n;
+}
+
 std::string joint_list(const std::vector<std::string>& names) {
   std::string list;
   for (const auto& j : names) list += (list.empty() ? "'" : ", '") + j + "'";
@@ -179,7 +205,9 @@ void TaskRun::set_up_references() {
     if (tracking_.site < 0) tracking_.body = mj_name2id(m, mjOBJ_BODY, f.frame.c_str());
   }
   if (!task.reference.is_null()) {
-    reference_ = trajectory_from_json(task.reference, where + ", 'reference'", start, base_dir);
+    const std::optional<Vec3<double>> plane =
+        frame_target_ ? motion_plane_normal(*model_, frame_target_->frame, resolved_.q0) : std::nullopt;
+    reference_ = trajectory_from_json(task.reference, where + ", 'reference'", start, base_dir, plane);
     (task.target ? tracking_.position : tracking_.joints) = reference_;
   }
 }
