@@ -29,6 +29,7 @@
 #include <nlohmann/json.hpp>
 
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/render/close_up.hpp"
 #include "idmpc/render/frame_path.hpp"
 #include "idmpc/render/framing.hpp"
 #include "idmpc/render/gl_context.hpp"
@@ -884,6 +885,104 @@ TEST_F(RenderTest, VideoOfAFrameTargetShowsItsPaths) {
   EXPECT_GE(count_hue(a, green), 30) << "no tool path";
   EXPECT_LE(count_hue(b, magenta), 5) << "a target path without frame columns";
   EXPECT_LE(count_hue(b, green), 5) << "a tool path without frame columns";
+}
+
+// a small flat path gets a close-up in the first free corner, seen square-on from the side of
+// its plane away from the motion; a path a quarter of the motion or larger, or no free corner,
+// gets none
+TEST_F(RenderTest, CloseUpShowsASmallFlatPathSquareOnInAFreeCorner) {
+  mj::ModelPtr model = mj::load_model(kUr5e);
+  const RunLog log = ur5e_circle_log(model.get(), 2.0, 0.05, 1);  // in the y-z plane at the tip
+  const FramePath path(log, 0.002);
+  ASSERT_FALSE(path.empty());
+  const Vec3 tip{log.frame_ref[0], log.frame_ref[1], log.frame_ref[2]};
+  // the arm's motion: a 1 m box on the −x side of the circle
+  Bounds motion;
+  motion.extend(Vec3{tip[0] - 0.5, tip[1], tip[2]}.data(), Vec3{0.5, 0.5, 0.5});
+  constexpr int kW = 1280, kH = 720, kMargin = 9;
+  OverlayPlaces places;
+  places.table = mjrRect{kMargin, kH - kMargin - 200, 300, 200};  // top left
+  places.plot = mjrRect{kW - kMargin - 380, kMargin, 380, 220};   // bottom right
+  const ScreenMask clear(32, 18);
+  const CloseUp c = plan_close_up(path, motion, 30, -20, 45, kW, kH, places, clear, kMargin);
+  ASSERT_TRUE(c.shown);
+  EXPECT_EQ(c.rect.left + c.rect.width, kW - kMargin) << "top right";
+  EXPECT_EQ(c.rect.bottom + c.rect.height, kH - kMargin) << "top right";
+  EXPECT_EQ(c.rect.width, 384);
+  EXPECT_EQ(c.rect.height, 216);
+  // the plane's normal is ±x; the motion lies on −x, so the camera is on +x looking along −x
+  EXPECT_NEAR(std::fabs(c.cam.azimuth), 180, 1e-6);
+  EXPECT_NEAR(c.cam.elevation, 0, 1e-6);
+  EXPECT_NEAR(c.cam.lookat[1], tip[1], 1e-6);
+  EXPECT_NEAR(c.cam.lookat[2], tip[2] - 0.05, 1e-3) << "aimed at the circle's centre";
+  EXPECT_GT(c.cam.distance, 0);
+  // the motion on +x: the camera on −x looking along +x
+  Bounds other_side;
+  other_side.extend(Vec3{tip[0] + 0.5, tip[1], tip[2]}.data(), Vec3{0.5, 0.5, 0.5});
+  const CloseUp back = plan_close_up(path, other_side, 30, -20, 45, kW, kH, places, clear, kMargin);
+  ASSERT_TRUE(back.shown);
+  EXPECT_NEAR(back.cam.azimuth, 0, 1e-6);
+
+  // the robot in the top right: the next free corner (top left holds the table: bottom left)
+  ScreenMask robot(32, 18);
+  robot.mark(ScreenRegion{0.3, 1, 0.3, 1});
+  const CloseUp moved = plan_close_up(path, motion, 30, -20, 45, kW, kH, places, robot, kMargin);
+  ASSERT_TRUE(moved.shown);
+  EXPECT_EQ(moved.rect.left, kMargin);
+  EXPECT_EQ(moved.rect.bottom, kMargin);
+
+  robot.mark_all();
+  EXPECT_FALSE(plan_close_up(path, motion, 30, -20, 45, kW, kH, places, robot, kMargin).shown) << "no free corner";
+  Bounds small;
+  small.extend(tip.data(), Vec3{0.15, 0.15, 0.15});
+  EXPECT_FALSE(plan_close_up(path, small, 30, -20, 45, kW, kH, places, clear, kMargin).shown)
+      << "a path a third of the motion needs none";
+}
+
+// the video shows the close-up: the target's magenta dots fill the top-right corner, where
+// without the overlays (and the close-up) there are hardly any
+TEST_F(RenderTest, VideoOfASmallPathShowsItsCloseUp) {
+  mj::ModelPtr model = mj::load_model(kUr5e);
+  const RunLog log = ur5e_circle_log(model.get(), 0.5, 0.04, 1);
+  VideoOptions options = small_options();
+  options.width = 640;
+  options.height = 360;
+  const std::string with = dir_.file("close_up.mp4");
+  const std::string without = dir_.file("no_close_up.mp4");
+  render_video(kUr5e, {log}, options, with);
+  options.overlay = false;
+  render_video(kUr5e, {log}, options, without);
+  const double magenta = to_hsv(kTargetPath[0], kTargetPath[1], kTargetPath[2]).h;
+  // the top-right corner of a frame: kCloseUpSide of each side
+  const auto corner = [](const std::vector<unsigned char>& rgb, int width, int height) {
+    std::vector<unsigned char> out;
+    const int w = static_cast<int>(kCloseUpSide * width), h = static_cast<int>(kCloseUpSide * height);
+    for (int y = 0; y < h; ++y) {
+      const auto row = rgb.begin() + (static_cast<long>(y) * width + (width - w)) * 3;
+      out.insert(out.end(), row, row + 3L * w);
+    }
+    return out;
+  };
+  const long in_close_up = count_hue(corner(decode_frame(with, 12), 640, 360), magenta);
+  const long plain = count_hue(corner(decode_frame(without, 12), 640, 360), magenta);
+  EXPECT_GE(in_close_up, plain + 100) << "close-up " << in_close_up << ", without " << plain;
+}
+
+// --antialias renders with the model's multisampling: the edges, and so the frame, differ
+TEST_F(RenderTest, AntialiasingChangesTheEdges) {
+  mj::ModelPtr model = mj::load_model(kUr5e);
+  const RunLog log = ur5e_circle_log(model.get(), 0.2, 0.04, 1);
+  VideoOptions options = small_options();
+  options.overlay = false;
+  const std::string plain = dir_.file("plain.mp4"), smooth = dir_.file("smooth.mp4");
+  render_video(kUr5e, {log}, options, plain);
+  options.antialias = true;
+  render_video(kUr5e, {log}, options, smooth);
+  const std::vector<unsigned char> a = decode_frame(plain, 2), b = decode_frame(smooth, 2);
+  ASSERT_EQ(a.size(), b.size());
+  long differ = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) differ += std::abs(int(a[i]) - int(b[i])) > 24;
+  EXPECT_GE(differ, 50) << "anti-aliasing changed " << differ << " channel values";
 }
 
 // ------------------------------------------------------------------------------- overlay

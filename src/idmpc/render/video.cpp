@@ -10,6 +10,7 @@
 
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/render/camera.hpp"
+#include "idmpc/render/close_up.hpp"
 #include "idmpc/render/frame_path.hpp"
 #include "idmpc/render/gl_context.hpp"
 #include "idmpc/render/replay.hpp"
@@ -172,6 +173,7 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   GlContext gl(options.width, options.height);
   m->vis.global.offwidth = options.width;
   m->vis.global.offheight = options.height;
+  if (!options.antialias) m->vis.quality.offsamples = 0;
   RenderContext context(m, font_scale_for(options.height));
   mjrContext& con = context.con;
   mjr_setBuffer(mjFB_OFFSCREEN, &con);
@@ -192,10 +194,18 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
                               static_cast<double>(options.width) / options.height, free_cam);
   Vec3 view_forward, view_up, view_right;
   camera_axes(free_cam.azimuth, free_cam.elevation, view_forward, view_up, view_right);
+  ScreenMask footprint(1, 1);
   if (options.overlay) {
-    overlay.avoid(robot_footprint(m, datas, replays, schedule, opt, cam, scn, options.width,
-                                  options.height, paths));
+    footprint = robot_footprint(m, datas, replays, schedule, opt, cam, scn, options.width, options.height, paths);
+    overlay.avoid(footprint);
   }
+  // a close-up of a small target path (a free camera's angles; none with the model's cameras)
+  const CloseUp close_up =
+      options.overlay && target_path < paths.size() && camera_spec.kind != CameraSpec::Kind::kFixed
+          ? plan_close_up(paths[target_path], motion.visible, free_cam.azimuth, free_cam.elevation,
+                          m->vis.global.fovy, options.width, options.height, overlay.places(), footprint,
+                          std::max(4, options.height / 80))
+          : CloseUp{};
 
   // scene dressing where the model has none
   const bool dress_floor = !has_plane(m);
@@ -208,12 +218,10 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
   std::vector<unsigned char> pixels(row_bytes * static_cast<std::size_t>(options.height));
   std::vector<unsigned char> frame(pixels.size());
 
-  for (long k = 0; k < schedule.frames; ++k) {
-    const double t = schedule.time(k);
-    for (std::size_t r = 0; r < replays.size(); ++r) set_pose(m, datas[r], replays[r], t);
-
-    // the scene: the first run (all categories), then the second run's moving geoms
-    mjv_updateScene(m, datas[0], &opt, nullptr, &cam, mjCAT_ALL, &scn);
+  // the scene seen by a camera: the first run (all categories), then the second run's moving
+  // geoms, the paths and the dressing
+  const auto build_scene = [&](mjvCamera& view, double t) {
+    mjv_updateScene(m, datas[0], &opt, nullptr, &view, mjCAT_ALL, &scn);
     if (compare) {
       const Vec3 eye{0.5 * (scn.camera[0].pos[0] + scn.camera[1].pos[0]),
                      0.5 * (scn.camera[0].pos[1] + scn.camera[1].pos[1]),
@@ -231,8 +239,20 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
     }
     if (dress_floor) add_floor(scn, motion.visible);
     if (dress_light) add_key_light(scn, motion.visible, view_forward);
+  };
+  mjvCamera close_up_cam = close_up.cam;
+
+  for (long k = 0; k < schedule.frames; ++k) {
+    const double t = schedule.time(k);
+    for (std::size_t r = 0; r < replays.size(); ++r) set_pose(m, datas[r], replays[r], t);
+    build_scene(cam, t);
     mjr_render(viewport, &scn, &con);
+    if (close_up.shown) {
+      build_scene(close_up_cam, t);
+      mjr_render(close_up.rect, &scn, &con);
+    }
     if (dress_sky) draw_sky(options.width, options.height);
+    draw_close_up_border(close_up);
 
     // overlays
     overlay.draw(t);

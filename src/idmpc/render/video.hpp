@@ -22,6 +22,10 @@ struct VideoOptions {
   std::string camera = "auto";
   /// text table (time, run labels, |u|, residual, update time) and |u| plot over the scene
   bool overlay = true;
+  /// multisample anti-aliasing with the model's off-screen samples (vis.quality.offsamples,
+  /// MuJoCo's default 4): smoother edges for about twice the software rendering time; off, the
+  /// scene is rendered with one sample per pixel
+  bool antialias = false;
   /// longest video accepted, in seconds of video (1 h): a log that would need more than
   /// fps x this many frames is refused before anything is loaded or rendered
   double max_video_seconds = 3600;
