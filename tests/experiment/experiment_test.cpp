@@ -66,12 +66,14 @@ TEST(PaperTask, DivergenceHintsNameTheSolversOwnSettings) {
   const std::string cgmres = divergence_hint(t);
   EXPECT_NE(cgmres.find("--zeta"), std::string::npos) << cgmres;
   EXPECT_EQ(cgmres.find("--iterations"), std::string::npos) << cgmres;
+  EXPECT_NE(cgmres.find("--solver riccati"), std::string::npos) << cgmres;
   t.solver = "riccati";
   const std::string riccati = divergence_hint(t);
   EXPECT_NE(riccati.find("--iterations 3"), std::string::npos) << riccati;
   EXPECT_NE(riccati.find("line_search"), std::string::npos) << riccati;
   EXPECT_EQ(riccati.find("--zeta"), std::string::npos) << riccati;
   EXPECT_EQ(riccati.find("--alpha"), std::string::npos) << riccati;
+  EXPECT_EQ(riccati.find("--solver"), std::string::npos) << riccati;
 }
 
 TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {

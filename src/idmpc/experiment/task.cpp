@@ -566,9 +566,12 @@ std::string divergence_hint(const Task& t, double damping_step_ratio) {
     tries.push_back("--iterations " + std::to_string(std::max(3, 2 * t.riccati.iterations)) +
                     " (more SQP iterations per update" +
                     std::string(t.riccati.line_search ? ")" : ", with \"riccati\": {\"line_search\": true} in the task)"));
-  } else if (t.alpha > 0 && !t.init_full_horizon) {
-    tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
-                    "growing the horizon from zero)");
+  } else {
+    if (t.alpha > 0 && !t.init_full_horizon) {
+      tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
+                      "growing the horizon from zero)");
+    }
+    tries.push_back("--solver riccati (Gauss-Newton SQP steps with a line search, no continuation to lose)");
   }
   tries.push_back("a larger --R (now " + (t.R.empty() ? std::string("auto") : text(t.R.front())) +
                   ") for smaller, smoother torques");
