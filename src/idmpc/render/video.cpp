@@ -248,8 +248,13 @@ void render_video(const std::string& model_path, const std::vector<RunLog>& runs
     build_scene(cam, t);
     mjr_render(viewport, &scn, &con);
     if (close_up.shown) {
+      // without shadows and reflections: their passes cost as much in a corner as in the frame
       build_scene(close_up_cam, t);
+      const mjtByte shadow = scn.flags[mjRND_SHADOW], reflection = scn.flags[mjRND_REFLECTION];
+      scn.flags[mjRND_SHADOW] = scn.flags[mjRND_REFLECTION] = 0;
       mjr_render(close_up.rect, &scn, &con);
+      scn.flags[mjRND_SHADOW] = shadow;
+      scn.flags[mjRND_REFLECTION] = reflection;
     }
     if (dress_sky) draw_sky(options.width, options.height);
     draw_close_up_border(close_up);
