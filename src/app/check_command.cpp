@@ -60,7 +60,7 @@ void run(const CheckOptions& opt) {
   const mjModel* m = loaded.model.get();
   if (!loaded.translations.empty()) {
     std::printf("%s\n", loaded.notice().c_str());
-    for (const std::string& t : loaded.translations) std::printf("  - %s\n", t.c_str());
+    for (const mj::Translation& t : loaded.translations) std::printf("  - %s\n", t.text.c_str());
   }
   mj::ImportOptions options;
   options.direct_torque = opt.direct_torque;

@@ -125,10 +125,10 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start,
   const double ramp = f.number("ramp", ramp_expected, false, 1.0);
   if (!(ramp >= 0) || ramp > CircleTrajectory::kMaxRamp) f.bad("ramp", ramp_expected);
   if (!std::isfinite(2 * M_PI * freq * r)) f.bad("radius", "a radius whose speed 2 pi frequency radius is finite [m]");
+  // the plane a planar arm moves in is also the one plane that faces it
   Vec3<double> n = plane_normal ? plane_normal->normalized() : Vec3<double>::UnitX();
-  if (f.j.contains("normal") && f.j.at("normal") == "facing" && plane_normal) {
-    // the plane the arm moves in is the one plane that faces it
-  } else if (f.j.contains("normal") && f.j.at("normal") == "facing") {
+  const bool facing = f.j.contains("normal") && f.j.at("normal") == "facing";
+  if (facing && !plane_normal) {
     // a vertical plane facing the base at the world origin: the normal along the start's
     // horizontal direction from it
     n = Vec3<double>(start[0], start[1], 0.0);
@@ -136,7 +136,7 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start,
       f.bad("normal", "[x, y, z], or \"facing\" with a start off the world's vertical axis");
     }
     n.normalize();
-  } else if (f.j.contains("normal")) {
+  } else if (f.j.contains("normal") && !facing) {
     n = f.vector("normal", 3, "a non-zero list of 3 numbers (the plane's normal) or \"facing\"");
     if (!(n.norm() > 0)) f.bad("normal", "a non-zero list of 3 numbers (the plane's normal)");
     n.normalize();

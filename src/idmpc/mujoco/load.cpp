@@ -172,39 +172,13 @@ std::vector<std::string> take_warnings() {
   return out;
 }
 
-namespace {
-
-// a few words naming what one translation did, for the one-line notice
-std::string translation_kind(const std::string& text) {
-  static const std::vector<std::pair<std::string, std::string>> kinds = {
-      {"<compiler autolimits>", "autolimits"},
-      {"integrator implicitfast", "implicitfast as implicit"},
-      {"keyframe", "keyframe blanks"},
-      {"gravcomp on", "gravcomp"},
-      {"inheritrange", "inheritrange"},
-      {"kv ", "kv"},
-      {"dampratio", "dampratio"},
-      {"actuatorfrcrange", "actuatorfrcrange"},
-      {"assetdir", "assetdir"},
-      {"only rendering uses", "render-only attributes dropped"},
-      {"\" dropped (", "no-op values dropped"}};
-  for (const auto& [needle, kind] : kinds) {
-    if (text.find(needle) != std::string::npos) return kind;
-  }
-  const std::string head = text.substr(0, text.find(" ("));
-  return head.size() > 40 ? head.substr(0, 40) + "…" : head;
-}
-
-}  // namespace
-
 std::string LoadedModel::notice() const {
   if (translations.empty()) return "";
   std::vector<std::pair<std::string, int>> kinds;  // in order of first appearance
-  for (const std::string& t : translations) {
-    const std::string kind = translation_kind(t);
-    const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == kind; });
+  for (const Translation& t : translations) {
+    const auto it = std::find_if(kinds.begin(), kinds.end(), [&](const auto& k) { return k.first == t.kind; });
     if (it == kinds.end()) {
-      kinds.emplace_back(kind, 1);
+      kinds.emplace_back(t.kind, 1);
     } else {
       ++it->second;
     }

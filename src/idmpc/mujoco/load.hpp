@@ -8,6 +8,8 @@
 
 #include <mujoco/mujoco.h>
 
+#include "idmpc/mujoco/mjcf_translate.hpp"
+
 namespace idmpc::mj {
 
 struct ModelDeleter {
@@ -31,7 +33,7 @@ std::vector<std::string> take_warnings();
 struct LoadedModel {
   ModelPtr model;
   std::string source;                     ///< the file loaded
-  std::vector<std::string> translations;  ///< one line per translation; empty if none was needed
+  std::vector<Translation> translations;  ///< one per translation; empty if none was needed
   /// Torque range per joint (mjModel joint index) that the file declares with actuatorfrcrange on
   /// a joint no actuator drives; ±infinity elsewhere (njnt entries each).
   std::vector<double> joint_force_lower, joint_force_upper;

@@ -374,9 +374,9 @@ class Translator {
     std::string list;
     for (std::size_t k = 0; k < ranged.size() && k < 3; ++k) list += (k ? ", " : "") + ranged[k];
     if (ranged.size() > 3) list += " and " + std::to_string(ranged.size() - 3) + " more";
-    out_.notices.push_back("<compiler autolimits> set to true, MuJoCo >= 3.0.0's default (earlier versions' is false): " +
+    out_.notices.push_back({"autolimits", "<compiler autolimits> set to true, MuJoCo >= 3.0.0's default (earlier versions' is false): " +
                            std::to_string(ranged.size()) + " range(s) without their limited flag limit (" +
-                           list + ")");
+                           list + ")"});
   }
 
   // biasprm[2] of a position/intvelocity shortcut as MuJoCo >= 2.3 resolves it: the element's
@@ -496,16 +496,16 @@ class Translator {
           remove_attr_.emplace_back(n, name);  // translated in the compiled model
         } else if (name == "integrator" && value == "implicitfast") {
           set_attr_.push_back({n, name, "implicit"});
-          out_.notices.push_back("integrator implicitfast replaced by implicit (" + model_.where(n) +
+          out_.notices.push_back({"implicitfast as implicit", "integrator implicitfast replaced by implicit (" + model_.where(n) +
                                  "), a different integrator: MuJoCo 2.2 has no implicitfast, and implicit also "
-                                 "keeps the Coriolis and centrifugal derivatives implicitfast leaves out");
+                                 "keeps the Coriolis and centrifugal derivatives implicitfast leaves out"});
         } else if (name == "assetdir" && tag == "compiler") {
           for (const char* dir : {"meshdir", "texturedir"}) {
             if (!n->has(dir)) set_attr_.push_back({n, dir, value});
           }
           remove_attr_.emplace_back(n, name);
-          out_.notices.push_back("<compiler assetdir=\"" + value + "\"> given as meshdir and texturedir (" +
-                                 model_.where(n) + ")");
+          out_.notices.push_back({"assetdir", "<compiler assetdir=\"" + value + "\"> given as meshdir and texturedir (" +
+                                 model_.where(n) + ")"});
         } else if (kRenderOnlyAttributes.count(tag) && kRenderOnlyAttributes.at(tag).count(name)) {
           remove_attr_.emplace_back(n, name);
           if (name == "type" && value == "directional") set_attr_.push_back({n, "directional", "true"});
@@ -522,8 +522,8 @@ class Translator {
                              (name == "eulerdamp" && value == "enable");
           remove_attr_.emplace_back(n, name);
           if (no_op) {
-            out_.notices.push_back(name + "=\"" + value + "\" dropped (" + model_.where(n) +
-                                   "): MuJoCo 2.2 behaves so without it");
+            out_.notices.push_back({"no-op values dropped", name + "=\"" + value + "\" dropped (" + model_.where(n) +
+                                   "): MuJoCo 2.2 behaves so without it"});
           } else {
             untranslatable(n, name, it->second);
           }
@@ -534,8 +534,8 @@ class Translator {
           const std::string v = n->get(key);
           if (n->has(key) && trimmed(v) != v) {
             set_attr_.push_back({n, key, trimmed(v)});
-            out_.notices.push_back(std::string("keyframe ") + key + " trimmed of surrounding blanks (" +
-                                   model_.where(n) + "): MuJoCo 2.2 reads a trailing blank as a missing number");
+            out_.notices.push_back({"keyframe blanks", std::string("keyframe ") + key + " trimmed of surrounding blanks (" +
+                                   model_.where(n) + "): MuJoCo 2.2 reads a trailing blank as a missing number"});
           }
         }
       }
@@ -545,8 +545,9 @@ class Translator {
       for (const auto& [attribute, count] : render_only_) {
         list += (list.empty() ? "" : ", ") + attribute + (count > 1 ? " (" + std::to_string(count) + "×)" : "");
       }
-      out_.notices.push_back("dropped what MuJoCo 2.2 does not have and only rendering uses: " + list +
-                             " (a light's type directional kept as directional=\"true\")");
+      out_.notices.push_back({"render-only attributes dropped",
+                              "dropped what MuJoCo 2.2 does not have and only rendering uses: " + list +
+                                  " (a light's type directional kept as directional=\"true\")"});
     }
   }
 
@@ -607,7 +608,7 @@ class Translator {
       text += "; actuatorgravcomp (" + actuator_gravcomp_joints_.front() +
               (actuator_gravcomp_joints_.size() > 1 ? ", …" : "") + ") is the same force without actuatorfrcrange";
     }
-    out_.notices.push_back(text);
+    out_.notices.push_back({"gravcomp", text});
   }
 
   struct Assignment {
@@ -655,7 +656,7 @@ MjcfTranslation translate_mjcf(const std::string& path) {
   return out;
 }
 
-JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::vector<std::string>& notices,
+JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::vector<Translation>& notices,
                                    std::vector<std::string>& untranslatable) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   JointForceRanges ranges{std::vector<double>(m->njnt, -kInf), std::vector<double>(m->njnt, kInf)};
@@ -698,8 +699,9 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
         target[0] = centre - radius;
         target[1] = centre + radius;
         (p.activation ? m->actuator_actlimited : m->actuator_ctrllimited)[u] = 1;
-        notices.push_back(label + ": inheritrange " + number(p.inheritrange) + " gives " +
-                          (p.activation ? "actrange " : "ctrlrange ") + range_text(target[0], target[1]));
+        notices.push_back({"inheritrange", label + ": inheritrange " + number(p.inheritrange) + " gives " +
+                                               (p.activation ? "actrange " : "ctrlrange ") +
+                                               range_text(target[0], target[1])});
       }
     }
     if (p.set_bias) {
@@ -707,7 +709,7 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
       const double kp = m->actuator_gainprm[u * mjNGAIN];
       if (p.bias < 0) {
         bias[2] = p.bias;
-        notices.push_back(label + ": " + p.bias_source + " gives biasprm[2] = " + number(bias[2]));
+        notices.push_back({"kv", label + ": " + p.bias_source + " gives biasprm[2] = " + number(bias[2])});
       } else {
         // MuJoCo >= 2.3: damping = dampratio·2·√(kp·m), m the inertia reflected through the
         // transmission at qpos0
@@ -717,8 +719,8 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
           if (trn * trn > mjMINVAL) mass += m->dof_M0[j] / (trn * trn);
         }
         bias[2] = -p.bias * 2 * std::sqrt(kp * mass);
-        notices.push_back(label + ": " + p.bias_source + " gives kv " + number(-bias[2]) +
-                          " (biasprm[2], from the inertia " + number(mass) + " at qpos0)");
+        notices.push_back({"dampratio", label + ": " + p.bias_source + " gives kv " + number(-bias[2]) +
+                                            " (biasprm[2], from the inertia " + number(mass) + " at qpos0)"});
       }
     }
   }
@@ -748,8 +750,8 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
     if (drivers.empty()) {
       ranges.lower[j] = p.lower;
       ranges.upper[j] = p.upper;
-      notices.push_back(label + ": actuatorfrcrange " + range_text(p.lower, p.upper) +
-                        " kept as the joint's torque range (no actuator drives it)");
+      notices.push_back({"actuatorfrcrange", label + ": actuatorfrcrange " + range_text(p.lower, p.upper) +
+                                                 " kept as the joint's torque range (no actuator drives it)"});
       continue;
     }
     const int u = drivers.front();
@@ -777,9 +779,9 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
     fr[0] = lo;
     fr[1] = hi;
     m->actuator_forcelimited[u] = 1;
-    notices.push_back(label + ": actuatorfrcrange " + range_text(p.lower, p.upper) + " becomes forcerange " +
-                      range_text(lo, hi) + " of " + actuator_label(m, u) + ", its only actuator (gear " +
-                      number(gear) + ")");
+    notices.push_back({"actuatorfrcrange", label + ": actuatorfrcrange " + range_text(p.lower, p.upper) +
+                                               " becomes forcerange " + range_text(lo, hi) + " of " +
+                                               actuator_label(m, u) + ", its only actuator (gear " + number(gear) + ")"});
   }
   return ranges;
 }

@@ -73,11 +73,18 @@ struct GravcompPatch {
   double value = 0;     ///< gravcomp (≠ 0)
 };
 
+/// @brief One translation made: a few words naming its kind ("kv", "inheritrange", …; the
+/// one-line notice counts them) and its full line (where, what became what).
+struct Translation {
+  std::string kind;
+  std::string text;
+};
+
 struct MjcfTranslation {
   /// files to give MuJoCo in place of those on disk: (path, translated text); empty if the
   /// model needs no translation
   std::vector<std::pair<std::string, std::string>> files;
-  std::vector<std::string> notices;         ///< one line per translation made in the text
+  std::vector<Translation> notices;         ///< one per translation made in the text
   std::vector<std::string> untranslatable;  ///< one item per attribute/element without equivalent
   std::vector<ActuatorPatch> actuators;
   std::vector<JointForcePatch> joints;
@@ -101,7 +108,7 @@ struct JointForceRanges {
 /// @brief Applies the compiled-model part of `t` to `m`: appends a notice per change and an item
 /// to `untranslatable` for what turns out to have no MuJoCo 2.2 equivalent (several actuators
 /// behind one actuatorfrcrange, an inheritrange target without a range, …).
-JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::vector<std::string>& notices,
+JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::vector<Translation>& notices,
                                    std::vector<std::string>& untranslatable);
 
 }  // namespace idmpc::mj

@@ -31,17 +31,29 @@ ImportOptions import_options(const Task& task, const LoadedModel& loaded) {
   return o;
 }
 
-// the rank of a frame's 6×n Jacobian, the highest at q and at q + 0.1 rad·(1, −1, 1, …)
-int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<double>& q) {
+// a frame's 6×n Jacobian at q and at q + 0.1 rad·(1, −1, 1, …), side by side (6×2n): where a
+// start at a singular pose does not decide what the arm can do
+MatX<double> jacobians_at_and_beside(const Model& model, const Frame& frame, const VecX<double>& q) {
   VecX<double> beside = q;
   for (int j = 0; j < model.n; ++j) beside[j] += j % 2 ? -0.1 : 0.1;
   FrameKinematics<double> fk(model, frame);
-  int rank = 0;
   Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.n);
+  MatX<double> both(6, 2 * model.n);
+  int k = 0;
   for (const VecX<double>* at : {&q, static_cast<const VecX<double>*>(&beside)}) {
     fk.compute(model, *at);
     fk.jacobian(J);
-    Eigen::JacobiSVD<MatX<double>> svd(J);
+    both.middleCols(k++ * model.n, model.n) = J;
+  }
+  return both;
+}
+
+// the rank of a frame's Jacobian, the higher at q and beside it
+int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<double>& q) {
+  const MatX<double> J = jacobians_at_and_beside(model, frame, q);
+  int rank = 0;
+  for (int k = 0; k < 2; ++k) {
+    Eigen::JacobiSVD<MatX<double>> svd(J.middleCols(k * model.n, model.n));
     svd.setThreshold(1e-6);
     rank = std::max(rank, static_cast<int>(svd.rank()));
   }
@@ -49,21 +61,11 @@ int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<doubl
 }
 
 // the direction the frame's position cannot move in, when its position Jacobian has rank 2 at q
-// and 0.1 rad beside it (a planar arm): the normal of the plane it moves in, signed towards where
-// the automatic camera looks at such a motion from (−y for the x–z plane, −x for y–z, +z, above,
+// and beside it (a planar arm): the normal of the plane it moves in, signed towards where the
+// automatic camera looks at such a motion from (−y for the x–z plane, −x for y–z, +z, above,
 // for a horizontal plane), so that a circle about it runs counter-clockwise in the video
 std::optional<Vec3<double>> motion_plane_normal(const Model& model, const Frame& frame, const VecX<double>& q) {
-  VecX<double> beside = q;
-  for (int j = 0; j < model.n; ++j) beside[j] += j % 2 ? -0.1 : 0.1;
-  FrameKinematics<double> fk(model, frame);
-  Eigen::Matrix<double, 6, Eigen::Dynamic> J(6, model.n);
-  MatX<double> Jp(3, 2 * model.n);
-  int k = 0;
-  for (const VecX<double>* at : {&q, static_cast<const VecX<double>*>(&beside)}) {
-    fk.compute(model, *at);
-    fk.jacobian(J);
-    Jp.middleCols(k++ * model.n, model.n) = J.topRows<3>();
-  }
+  const MatX<double> Jp = jacobians_at_and_beside(model, frame, q).topRows<3>();
   const Eigen::JacobiSVD<MatX<double>> svd(Jp, Eigen::ComputeFullU);
   const VecX<double>& sigma = svd.singularValues();
   if (!(sigma[0] > 0) || sigma[1] <= 1e-6 * sigma[0] || sigma[2] > 1e-6 * sigma[0]) return std::nullopt;
