@@ -56,12 +56,18 @@ void run(const CheckOptions& opt) {
   if (opt.samples < 1) {
     throw std::invalid_argument("--samples must be at least 1, got " + std::to_string(opt.samples));
   }
-  const mj::LoadedModel loaded = mj::load_model_translated(opt.model);
-  const mjModel* m = loaded.model.get();
-  if (!loaded.translations.empty()) {
-    std::printf("%s\n", loaded.notice().c_str());
-    for (const mj::Translation& t : loaded.translations) std::printf("  - %s\n", t.text.c_str());
+  // joints the controller holds (a gripper's fingers) are welded in its model, as in swingup,
+  // at the model's reference configuration
+  const mj::ControllerModel models = mj::load_controller_model(opt.model, "", !opt.direct_torque);
+  const mj::LoadedModel& full = models.full;
+  const mj::HeldJoints& held = models.held;
+  if (!full.translations.empty()) {
+    std::printf("%s\n", full.notice().c_str());
+    for (const mj::Translation& t : full.translations) std::printf("  - %s\n", t.text.c_str());
   }
+  const mj::LoadedModel& loaded = models.controller();
+  const mjModel* m = loaded.model.get();
+  if (!held.empty()) std::printf("%s\n", held.notice(full.model.get()).c_str());
   mj::ImportOptions options;
   options.direct_torque = opt.direct_torque;
   options.actuate_every_joint = opt.actuate_every_joint;
@@ -83,7 +89,11 @@ void run(const CheckOptions& opt) {
     }
   }();
   print_summary(m, imported, actuation_problem);
-  const auto entries = mj::check_model(m, imported.model, opt.samples, opt.seed);
+  auto entries = mj::check_model(m, imported.model, opt.samples, opt.seed);
+  if (!held.empty()) {
+    const auto rows = mj::check_held(full.model.get(), held, imported.model, opt.samples, opt.seed);
+    entries.insert(entries.end(), rows.begin(), rows.end());
+  }
   const auto simplified = mj::reference_simplifications(m);
   if (!simplified.empty()) {
     std::printf("\nMuJoCo reference without what the controller does not model:\n");

@@ -23,6 +23,7 @@
 #include "idmpc/mujoco/check.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "support/problems.hpp"
 #include "support/random_model.hpp"
 #include "support/test_models.hpp"
 
@@ -114,7 +115,7 @@ std::unique_ptr<Loaded> load_case(const Case& c) {
   options.gravcomp = c.gravcomp;
   mj::ModelPtr m = c.path.empty()
                        ? mj::load_model_from_string(test::random_tree_mjcf(c.seed, options))
-                       : mj::load_model(c.path);
+                       : test::load_problem(c.path).m;  // a gripper's held joints welded
   Model model = mj::import_model(m.get(), c.label).model;
   return std::make_unique<Loaded>(Loaded{std::move(m), std::move(model)});
 }

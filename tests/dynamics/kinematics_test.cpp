@@ -21,6 +21,7 @@
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/spatial/pack.hpp"
+#include "support/problems.hpp"
 #include "support/lanes.hpp"
 #include "support/random_model.hpp"
 #include "support/test_models.hpp"
@@ -159,7 +160,8 @@ class KinematicsTest : public ::testing::TestWithParam<Case> {
     const std::vector<std::string> stale = mj::take_warnings();
     ASSERT_TRUE(stale.empty()) << "MuJoCo warnings before the test:" << joined(stale);
     const Case& c = GetParam();
-    m_ = c.path.empty() ? mj::load_model_from_string(random_tree_with_sites(c.seed)) : mj::load_model(c.path);
+    // shipped models as the controller sees them: a gripper's held joints welded
+    m_ = c.path.empty() ? mj::load_model_from_string(random_tree_with_sites(c.seed)) : test::load_problem(c.path).m;
     model_ = std::make_unique<Model>(mj::import_model(m_.get(), c.label).model);
     for (int s = 0; s < m_->nsite; ++s) {
       const char* name = mj_id2name(m_.get(), mjOBJ_SITE, s);

@@ -24,6 +24,7 @@
 #include "idmpc/mujoco/mjcf_scan.hpp"
 #include "idmpc/mujoco/plant.hpp"
 #include "idmpc/mujoco/reference.hpp"
+#include "support/problems.hpp"
 #include "support/random_model.hpp"
 #include "support/test_models.hpp"
 
@@ -414,7 +415,7 @@ TEST_F(ImportTest, ShippedAndRandomModelsHaveNothingUnmodeled) {
            item.rfind("friction loss on ", 0) == 0;
   };
   for (const std::string& path : test::shipped_model_paths()) {
-    const mj::ModelPtr m = mj::load_model(path);
+    const mj::ModelPtr m = test::load_problem(path).m;  // a gripper's held joints welded
     const mj::ImportedModel imported = mj::import_model(m.get(), path);
     bool ranged = false;
     for (int u = 0; u < m->nu; ++u) ranged = ranged || m->actuator_ctrllimited[u];
@@ -531,7 +532,7 @@ void expect_welded_masses_merged(const mjModel* m, const Model& model, const std
 
 TEST_F(ImportTest, WeldedBodyMassesMergeIntoTheirLinks) {
   for (const std::string& path : test::shipped_model_paths()) {
-    const mj::ModelPtr m = mj::load_model(path);
+    const mj::ModelPtr m = test::load_problem(path).m;  // a gripper's held joints welded
     expect_welded_masses_merged(m.get(), mj::import_model(m.get(), path).model, path);
   }
   for (unsigned seed = 1; seed <= 50; ++seed) {

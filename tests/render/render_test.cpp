@@ -1230,6 +1230,37 @@ TEST_F(RenderTest, CommandLineRendersAndReportsErrors) {
   EXPECT_NE(missing.out.find("nope.csv"), std::string::npos) << missing.out;
 }
 
+// a run whose controller held the gripper's fingers logs the arm's joints; its summary says where
+// the fingers were held, and the render puts them there on the whole model; without the summary
+// the log does not fit the model
+TEST_F(RenderTest, ALogWithHeldJointsReplaysThemWhereHeld) {
+  const std::string csv = dir_.file("hand.csv");
+  const std::string task = std::string(IDMPC_SOURCE_DIR) + "/mjcf/panda_hand_reach.json";
+  const CommandResult ran = run(std::string("'") + IDMPC_BINARY + "' swingup --task '" + task +
+                                "' --duration 0.1 --quiet --log '" + csv + "' --summary '" + dir_.file("hand.json") +
+                                "' 2>&1");
+  ASSERT_EQ(ran.status, 2) << "0.1 s: ran, target not reached yet\n" << ran.out;
+  const std::string model = std::string(IDMPC_SOURCE_DIR) + "/mjcf/panda_hand.xml";
+  const RunLog log = read_run_log(csv);
+  ASSERT_EQ(log.n, 7);
+  ASSERT_EQ(log.held_joints, (std::vector<std::string>{"finger_joint1", "finger_joint2"}));
+  const mj::ModelPtr m = mj::load_model(model);
+  check_run_log(log, m.get(), model);
+  std::vector<mjtNum> qpos(static_cast<std::size_t>(m->nq), -1.0);
+  log_pose(log, 5, m.get(), qpos.data());
+  for (int i = 0; i < 7; ++i) EXPECT_EQ(qpos[static_cast<std::size_t>(i)], log.q_row(5)[i]) << i;
+  EXPECT_EQ(qpos[7], 0.04);
+  EXPECT_EQ(qpos[8], 0.04);
+  const std::string out = dir_.file("hand.mp4");
+  render_video(model, {log}, small_options(), out);
+  EXPECT_TRUE(fs::exists(out));
+
+  fs::remove(dir_.file("hand.json"));
+  const RunLog bare = read_run_log(csv);
+  const std::string msg = message_of<std::invalid_argument>([&] { check_run_log(bare, m.get(), model); });
+  EXPECT_NE(msg.find("7 joints but model 'panda_hand.xml' has 9"), std::string::npos) << msg;
+}
+
 // a stale or broken summary beside the log: a warning, and the log is rendered under its name
 TEST_F(RenderTest, CommandLineWarnsAboutAStaleSummaryAndRendersTheLog) {
   const std::string csv = dir_.file("cli.csv");

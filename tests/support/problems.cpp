@@ -3,12 +3,15 @@
 #include <utility>
 
 #include "idmpc/experiment/task.hpp"
+#include "idmpc/mujoco/hold.hpp"
 #include "idmpc/mujoco/import.hpp"
 
 namespace idmpc::test {
 
 Problem load_problem(const std::string& path) {
-  mj::ModelPtr m = mj::load_model(path);
+  // the controller's model: a gripper's held joints welded (hold.hpp)
+  mj::ControllerModel models = mj::load_controller_model(path);
+  mj::ModelPtr m = std::move(models.held.empty() ? models.full.model : models.welded.model);
   Model model = mj::import_model(m.get(), path).model;
   return {std::move(m), std::move(model)};
 }

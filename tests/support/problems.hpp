@@ -17,7 +17,8 @@ struct Problem {
   Model model;
 };
 
-/// @brief Loads and imports a model file (throws like the CLI would).
+/// @brief Loads and imports a model file as the controller sees it, a gripper's held joints
+/// welded (hold.hpp); throws like the CLI would.
 Problem load_problem(const std::string& path);
 
 /// @brief The paper's weights (mjcf/paper_swingup.json) with Q_a set to `Qa`.

@@ -122,6 +122,8 @@ void read_sibling_summary(RunLog& log) {
   log.model_hash = s.model_hash;
   log.formulation = s.task.formulation;
   log.derivatives = s.task.derivatives;
+  log.held_joints = s.held_joints;
+  log.held_q = s.held_q;
   log.label = s.label();
 }
 
@@ -370,6 +372,10 @@ nlohmann::json to_json(const RunSummary& s) {
   j["max_constraint_violation"] = std::isfinite(s.max_constraint_violation)
                                       ? nlohmann::json(s.max_constraint_violation)
                                       : nlohmann::json(nullptr);  // NaN: the OCP's torques were not finite
+  if (!s.held_joints.empty()) {
+    j["held_joints"] = s.held_joints;
+    j["held_q"] = s.held_q;
+  }
   if (!s.model_hash.empty()) j["model_hash"] = s.model_hash;
   if (!s.log_hash.empty()) j["log_hash"] = s.log_hash;
   return j;
@@ -443,7 +449,7 @@ constexpr SummaryField kSummaryFields[] = {
     {"torque_lower", Kind::kNumbersOrNulls, true}, {"torque_upper", Kind::kNumbersOrNulls, true},
     {"saturated_steps", Kind::kIntegers, true}, {"saturated_any", Kind::kInteger, true},
     {"max_constraint_violation", Kind::kNumberOrNull, false}, {"model_hash", Kind::kString, false},
-    {"log_hash", Kind::kString, false}};
+    {"log_hash", Kind::kString, false}, {"held_joints", Kind::kStrings, false}, {"held_q", Kind::kNumbers, false}};
 
 void check_summary_fields(const nlohmann::json& j, const std::string& where) {
   for (const SummaryField& f : kSummaryFields) {
@@ -563,6 +569,12 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     if (j.contains("max_constraint_violation")) s.max_constraint_violation = number("max_constraint_violation");
     if (j.contains("model_hash")) s.model_hash = j.at("model_hash").get<std::string>();
     if (j.contains("log_hash")) s.log_hash = j.at("log_hash").get<std::string>();
+    s.held_joints = j.value("held_joints", std::vector<std::string>{});
+    s.held_q = j.value("held_q", std::vector<double>{});
+    if (s.held_q.size() != s.held_joints.size()) {
+      throw std::runtime_error(where + ": 'held_q' has " + std::to_string(s.held_q.size()) + " values for " +
+                               std::to_string(s.held_joints.size()) + " 'held_joints'");
+    }
   } catch (const nlohmann::json::exception&) {
     // check_summary_fields names every field read above: a field it does not know
     throw std::runtime_error(where + ": a field of an unexpected type (not an idmpc run summary of this version?)");

@@ -92,6 +92,10 @@ struct RunSummary {
   std::vector<double> friction_velocity;  ///< ε of the horizon's smooth friction (0: none)
   std::vector<double> Qq, Qv, R;   ///< the weights as run ("auto" resolved)
   std::vector<std::string> unbounded_joints;  ///< joints without a declared torque limit
+  /// @brief Joints the controller held (a gripper's fingers, hold.hpp), not in the log's q,
+  /// and where it held them
+  std::vector<std::string> held_joints;
+  std::vector<double> held_q;
   std::vector<std::string> unmodeled;
   /// @brief said at the start: what loading translated or replaced, what was chosen automatically
   std::vector<std::string> notices;
@@ -142,6 +146,9 @@ struct RunLog {
   /// @brief From the sibling summary when it was used: its path, the model it names (as run)
   /// and that model file's hash ("" if the summary has none); all "" otherwise
   std::string summary_path, summary_model, model_hash;
+  /// @brief From the sibling summary: the joints the controller held, not in q, and where
+  std::vector<std::string> held_joints;
+  std::vector<double> held_q;
   /// @brief Why a sibling summary was not used (unreadable, or of another run), or ""
   std::string summary_warning;
 

@@ -133,4 +133,45 @@ std::vector<CheckEntry> check_model(const mjModel* m, const Model& model, int sa
   return entries;
 }
 
+std::vector<CheckEntry> check_held(const mjModel* full, const HeldJoints& held, const Model& model, int samples,
+                                   unsigned seed, const CheckTolerances& tol) {
+  const ModelPtr reference_model = as_modeled(full);
+  Reference ref(reference_model.get());
+  Data data(model);
+  const int n = model.n;
+  if (static_cast<int>(held.dof_of.size()) != n) {
+    throw std::invalid_argument("check_held: the model has " + std::to_string(n) + " dofs, the held model " +
+                                std::to_string(held.dof_of.size()));
+  }
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  auto random = [&](double scale) {
+    VecX<double> x(n);
+    for (int i = 0; i < n; ++i) x[i] = scale * unit(rng);
+    return x;
+  };
+  // the held joints where held, at rest
+  auto embed = [&](const VecX<double>& x) {
+    VecX<double> out = VecX<double>::Zero(full->nv);
+    for (int i = 0; i < n; ++i) out[held.dof_of[static_cast<std::size_t>(i)]] = x[i];
+    return out;
+  };
+  std::vector<CheckEntry> entries = {
+      {"ID vs mj_inverse, held joints at rest", 0, tol.mujoco},
+      {"M vs mj_fullM rows, held joints at rest", 0, tol.mujoco},
+  };
+  for (int s = 0; s < samples; ++s) {
+    const VecX<double> q = model.q_ref + random(3.0), v = random(2.0), a = random(5.0);
+    const VecX<double> q_full = held.full_q(q);
+    entries[0].record(relative_error(rnea(model, data, q, v, a), held.controlled(ref.inverse(q_full, embed(v), embed(a)))));
+    const MatX<double> M_full = ref.mass_matrix(q_full);
+    MatX<double> M_rows(n, n);
+    for (int i = 0; i < n; ++i) {
+      for (int j = 0; j < n; ++j) M_rows(i, j) = M_full(held.dof_of[static_cast<std::size_t>(i)], held.dof_of[static_cast<std::size_t>(j)]);
+    }
+    entries[1].record(relative_error(crba(model, data, q), M_rows));
+  }
+  return entries;
+}
+
 }  // namespace idmpc::mj

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "idmpc/mujoco/hold.hpp"
 #include "idmpc/mujoco/import.hpp"
 
 namespace idmpc::mj {
@@ -47,5 +48,12 @@ std::vector<std::string> reference_simplifications(const mjModel* m);
 /// with the features of reference_simplifications switched off.
 std::vector<CheckEntry> check_model(const mjModel* m, const Model& model, int samples,
                                     unsigned seed, const CheckTolerances& tol = {});
+
+/// @brief For a model whose controller holds joints (hold.hpp): `model`, the controller's
+/// model (the held joints welded), against MuJoCo on the whole model `full` with the held joints
+/// where held and at rest (zero velocity and acceleration): its inverse dynamics and mass matrix
+/// are the rows of the other dofs, exactly. `samples` random states from `seed`.
+std::vector<CheckEntry> check_held(const mjModel* full, const HeldJoints& held, const Model& model, int samples,
+                                   unsigned seed, const CheckTolerances& tol = {});
 
 }  // namespace idmpc::mj

@@ -20,7 +20,8 @@ class TrackingMeter {
   TrackingMeter(const mjModel* m, const TrackingSettings& s, int n)
       : m_(m), s_(s), d_(s.frame() ? make_data(m) : nullptr), q_ref_(n), rate_(n) {}
 
-  // the frame's position and target at (t, q), accumulated; false without a frame
+  // the frame's position and target at (t, q), accumulated; false without a frame; q is the
+  // model's whole qpos
   bool measure(double t, const VecX<double>& q) {
     if (!s_.frame()) return false;
     Eigen::Map<VecX<double>>(d_->qpos, q.size()) = q;
@@ -180,7 +181,7 @@ class ClosedLoop {
     v_ = plant_.v();
     bool tracked = false;
     try {
-      tracked = meter_.measure(t, q_);
+      tracked = meter_.measure(t, plant_.full_q());  // held joints included
     } catch (const std::runtime_error& e) {
       record_divergence(result_, t, e.what());
       return false;
@@ -229,7 +230,7 @@ class ClosedLoop {
     result_.final_q_error = meter_.joint_error(t_end, result_.final_q, controller_);
     if (!result_.diverged) {
       try {
-        meter_.measure(t_end, result_.final_q);  // the state the run ends in
+        meter_.measure(t_end, plant_.full_q());  // the state the run ends in
       } catch (const std::runtime_error& e) {
         record_divergence(result_, t_end, e.what());
       }

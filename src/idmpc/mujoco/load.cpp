@@ -193,7 +193,7 @@ std::string LoadedModel::notice() const {
          list + "), each listed by 'idmpc check'";
 }
 
-LoadedModel load_model_translated(const std::string& path) {
+LoadedModel load_model_translated(const std::string& path, const Weld* weld) {
   install_error_handlers();
   // a regular file MuJoCo can read whole: a directory, FIFO or device is refused before any read
   const std::string problem = input_file_problem(path, "an MJCF or URDF file");
@@ -202,7 +202,7 @@ LoadedModel load_model_translated(const std::string& path) {
   const std::vector<MjcfElement> elements = scan_mjcf(path);
   check_render_asset_sizes(elements, path);
   check_finite_numbers(elements, path);
-  const MjcfTranslation translation = translate_mjcf(path);
+  const MjcfTranslation translation = translate_mjcf(path, weld);
   std::vector<std::string> untranslatable = translation.untranslatable;
   auto refuse_untranslatable = [&] {
     const std::string version = mj_versionString();

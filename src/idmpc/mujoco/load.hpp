@@ -63,7 +63,10 @@ struct LoadedModel {
 /// what only the compiler knows is set in the compiled model. What has no MuJoCo 2.2 equivalent
 /// is listed all at once in the one-line error, each item with its element, name, attribute and
 /// line. A file that needs no translation is loaded exactly as written.
-LoadedModel load_model_translated(const std::string& path);
+///
+/// With `weld`, the joints it names are welded in the text MuJoCo parses (Weld): the
+/// controller's model of an arm whose gripper it holds (hold.hpp).
+LoadedModel load_model_translated(const std::string& path, const Weld* weld = nullptr);
 
 /// @brief load_model_translated(path).model: the translations are not reported.
 ModelPtr load_model(const std::string& path);

@@ -298,7 +298,8 @@ class LinePrinter {
 
 class Translator {
  public:
-  Translator(MjcfTree& model, MjcfTranslation& out) : model_(model), defaults_(model.root()), out_(out) {}
+  Translator(MjcfTree& model, MjcfTranslation& out, const Weld* weld)
+      : model_(model), defaults_(model.root()), out_(out), weld_(weld) {}
 
   void run() {
     collect(model_.root());
@@ -307,6 +308,7 @@ class Translator {
     plan_actuators();
     plan_joints();
     scan_newer_names();
+    if (weld_) plan_weld(*weld_);
     edit_text();
   }
 
@@ -333,9 +335,97 @@ class Translator {
     }
     for (Node* c : body->children) {
       if (c->tag() != "body") continue;
+      body_node_[next_body_] = c;
       body_id_[c] = next_body_++;  // MuJoCo numbers bodies in this depth-first order
       bodies(c);
     }
+  }
+
+  // the welded joints leave the text, their bodies placed where the joints held them; what
+  // names them goes too, and the keyframes and sensors, whose sizes change; the patches of the
+  // compiled model follow the new actuator and joint numbers
+  void plan_weld(const Weld& w) {
+    std::set<int> joints;
+    std::set<std::string> names;
+    for (const int j : w.joints) {
+      if (j < 0 || j >= static_cast<int>(joints_.size())) {
+        throw std::invalid_argument("cannot weld joint #" + std::to_string(j) + ": the file has " +
+                                    std::to_string(joints_.size()) + " joints");
+      }
+      joints.insert(j);
+      if (joints_[j]->has("name")) names.insert(joints_[j]->get("name"));
+      remove_element_.push_back(joints_[j]);
+    }
+    for (const Weld::Body& b : w.bodies) {
+      const auto it = body_node_.find(b.body);
+      if (it == body_node_.end()) throw std::invalid_argument("cannot place body #" + std::to_string(b.body));
+      std::ostringstream pos, quat;
+      pos.precision(17);
+      quat.precision(17);
+      pos << b.pos[0] << ' ' << b.pos[1] << ' ' << b.pos[2];
+      quat << b.quat[0] << ' ' << b.quat[1] << ' ' << b.quat[2] << ' ' << b.quat[3];
+      set_attr_.push_back({it->second, "pos", pos.str()});
+      set_attr_.push_back({it->second, "quat", quat.str()});
+      for (const char* other : {"euler", "axisangle", "xyaxes", "zaxis"}) {
+        if (it->second->has(other)) remove_attr_.emplace_back(it->second, other);
+      }
+    }
+    std::set<std::string> tendons;
+    for (Node* t : tendons_) {
+      if (t->tag() != "fixed") continue;
+      int welded = 0, total = 0;
+      for (const Node* c : t->children) {
+        if (c->tag() != "joint") continue;
+        ++total;
+        welded += names.count(c->get("joint")) > 0;
+      }
+      if (welded == 0) continue;
+      if (welded < total) {
+        throw std::invalid_argument("fixed tendon " + model_.where(t) +
+                                    " couples held joints with joints the controller drives, which idmpc does "
+                                    "not model");
+      }
+      tendons.insert(t->get("name"));
+      remove_element_.push_back(t);
+    }
+    std::vector<int> actuators;
+    for (std::size_t u = 0; u < actuators_.size(); ++u) {
+      Node* a = actuators_[u];
+      if (names.count(a->get("joint")) || names.count(a->get("jointinparent")) ||
+          (a->has("tendon") && tendons.count(a->get("tendon")))) {
+        actuators.push_back(static_cast<int>(u));
+        remove_element_.push_back(a);
+      }
+    }
+    for (Node* section : model_.root()->children) {
+      if (section->tag() == "keyframe" || section->tag() == "sensor") remove_element_.push_back(section);
+      if (section->tag() != "equality") continue;
+      for (Node* c : section->children) {
+        if ((c->tag() == "joint" && (names.count(c->get("joint1")) || names.count(c->get("joint2")))) ||
+            (c->tag() == "tendon" && (tendons.count(c->get("tendon1")) || tendons.count(c->get("tendon2"))))) {
+          remove_element_.push_back(c);
+        }
+      }
+    }
+    // the patches by the numbers of the welded text
+    auto renumber = [](int& index, const std::vector<int>& removed) {
+      const auto below = std::lower_bound(removed.begin(), removed.end(), index);
+      if (below != removed.end() && *below == index) return false;
+      index -= static_cast<int>(below - removed.begin());
+      return true;
+    };
+    const std::vector<int> removed_joints(joints.begin(), joints.end());
+    std::vector<ActuatorPatch> kept_actuators;
+    for (ActuatorPatch p : out_.actuators) {
+      if (renumber(p.actuator, actuators)) kept_actuators.push_back(p);
+    }
+    out_.actuators = std::move(kept_actuators);
+    std::vector<JointForcePatch> kept_joints;
+    for (JointForcePatch p : out_.joints) {
+      if (renumber(p.joint, removed_joints)) kept_joints.push_back(p);
+    }
+    out_.joints = std::move(kept_joints);
+    welded_ = true;
   }
 
   std::optional<std::pair<std::string, const Node*>> resolve(const Node* n, const std::set<std::string>& tags,
@@ -572,7 +662,13 @@ class Translator {
       n->e->DeleteAttribute(name.c_str());
       n->src->changed = true;
     }
+    // each element once, and none inside another that goes
+    const std::set<const Node*> removed(remove_element_.begin(), remove_element_.end());
+    std::set<const Node*> done;
     for (Node* n : remove_element_) {
+      bool inside = !done.insert(n).second;
+      for (const Node* p = n->parent; p && !inside; p = p->parent) inside = removed.count(p) > 0;
+      if (inside) continue;
       if (XMLElement* parent = n->e->Parent() ? n->e->Parent()->ToElement() : nullptr) {
         parent->DeleteChild(n->e);
         n->src->changed = true;
@@ -580,7 +676,7 @@ class Translator {
     }
     if (!out_.gravcomp.empty()) add_gravcomp_field();
     for (const auto& src : model_.sources()) {
-      if (src->changed) out_.files.emplace_back(src->path, LinePrinter().print(*src->doc));
+      if (src->changed || welded_) out_.files.emplace_back(src->path, LinePrinter().print(*src->doc));
     }
   }
 
@@ -619,8 +715,11 @@ class Translator {
   MjcfTree& model_;
   Defaults defaults_;
   MjcfTranslation& out_;
+  const Weld* weld_;
+  bool welded_ = false;
   std::vector<Node*> all_, compilers_, actuators_, tendons_, joints_;
   std::map<const Node*, int> body_id_;
+  std::map<int, Node*> body_node_;
   int next_body_ = 1;
   std::vector<std::string> actuator_gravcomp_joints_;  // where actuatorgravcomp is the passive force
   std::vector<Assignment> set_attr_;
@@ -648,11 +747,14 @@ std::string range_text(double lo, double hi) { return "[" + number(lo) + ", " + 
 }  // namespace
 
 
-MjcfTranslation translate_mjcf(const std::string& path) {
+MjcfTranslation translate_mjcf(const std::string& path, const Weld* weld) {
   MjcfTranslation out;
   MjcfTree model(path);
-  if (!model.ok()) return out;
-  Translator(model, out).run();
+  if (!model.ok()) {
+    if (weld) throw std::invalid_argument("cannot weld joints of '" + path + "': it is no MJCF file idmpc can read");
+    return out;
+  }
+  Translator(model, out, weld).run();
   return out;
 }
 

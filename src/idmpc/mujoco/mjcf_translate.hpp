@@ -93,11 +93,28 @@ struct MjcfTranslation {
   bool needed() const { return !files.empty() || !actuators.empty() || !joints.empty() || !gravcomp.empty(); }
 };
 
+/// @brief Joints to weld in the text: the controller's model of an arm whose gripper it holds
+/// (hold.hpp). Each welded joint is removed and its body placed where the joint held it; what
+/// names a welded joint goes with it (fixed tendons over welded joints only, the actuators on
+/// those tendons or joints, joint equalities), and so do the keyframes and sensors (their sizes
+/// change; neither acts on the dynamics).
+struct Weld {
+  struct Body {
+    int body = -1;                ///< compiled body index
+    double pos[3] = {0, 0, 0};    ///< its placement in its parent with the joints held
+    double quat[4] = {1, 0, 0, 0};
+  };
+  std::vector<int> joints;        ///< compiled joint indices; each body's joints all, or none
+  std::vector<Body> bodies;
+};
+
 /// @brief Reads the MJCF file at `path` and its includes (resolved against the directory of
-/// `path`, as MuJoCo 2.2 does) and translates them. Untranslatable items are listed, not thrown;
-/// the translated text then leaves them out, so that compiling it can still find what the
-/// compiled model alone reveals.
-MjcfTranslation translate_mjcf(const std::string& path);
+/// `path`, as MuJoCo 2.2 does) and translates them, welding the joints of `weld` if given.
+/// Untranslatable items are listed, not thrown; the translated text then leaves them out, so
+/// that compiling it can still find what the compiled model alone reveals. Throws
+/// std::invalid_argument for a weld the text cannot take (a fixed tendon over welded and other
+/// joints).
+MjcfTranslation translate_mjcf(const std::string& path, const Weld* weld = nullptr);
 
 /// @brief Torque range per joint (mjModel joint index) from actuatorfrcrange on joints that no
 /// actuator drives; ±infinity elsewhere.

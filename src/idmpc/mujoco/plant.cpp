@@ -7,12 +7,39 @@
 
 namespace idmpc::mj {
 
-Plant::Plant(const mjModel* m, const Actuation& actuation) : actuation_(actuation) {
+Plant::Plant(const mjModel* m, const Actuation& actuation, const HeldJoints& held)
+    : actuation_(actuation), held_(held) {
   install_error_handlers();
   m_.reset(mj_copyModel(nullptr, m));
   if (!m_) throw std::runtime_error("MuJoCo could not copy the model");
-  if (actuation_.direct) m_->opt.disableflags |= mjDSBL_ACTUATION;
+  if (held_.empty()) {
+    for (int i = 0; i < m_->nv; ++i) dof_of_.push_back(i);
+    for (int u = 0; u < m_->nu; ++u) actuator_of_.push_back(u);
+    if (actuation_.direct) m_->opt.disableflags |= mjDSBL_ACTUATION;
+  } else {
+    dof_of_ = held_.dof_of;
+    actuator_of_ = held_.actuator_of;
+    // the held joints' actuators stay; direct torques replace the others, whose force is zero
+    if (actuation_.direct) {
+      for (const int u : actuator_of_) {
+        mju_zero(m_->actuator_gainprm + u * mjNGAIN, mjNGAIN);
+        mju_zero(m_->actuator_biasprm + u * mjNBIAS, mjNBIAS);
+      }
+    }
+  }
   d_ = make_data(m_.get());
+}
+
+VecX<double> Plant::q() const {
+  VecX<double> out(nv());
+  for (int i = 0; i < nv(); ++i) out[i] = d_->qpos[m_->jnt_qposadr[m_->dof_jntid[dof_of_[static_cast<std::size_t>(i)]]]];
+  return out;
+}
+
+VecX<double> Plant::v() const {
+  VecX<double> out(nv());
+  for (int i = 0; i < nv(); ++i) out[i] = d_->qvel[dof_of_[static_cast<std::size_t>(i)]];
+  return out;
 }
 
 std::string Plant::set_control_period(double dt) {
@@ -34,13 +61,27 @@ std::string Plant::set_control_period(double dt) {
 }
 
 void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
-  if (q.size() != m_->nq || v.size() != m_->nv) {
-    throw std::invalid_argument("initial state has " + std::to_string(q.size()) +
-                                " positions, the model has " + std::to_string(m_->nq));
+  if (q.size() != nv() || v.size() != nv()) {
+    throw std::invalid_argument("initial state has " + std::to_string(q.size()) + " positions and " +
+                                std::to_string(v.size()) + " velocities, the controller's model has " +
+                                std::to_string(nv()));
   }
   mj_resetData(m_.get(), d_.get());
-  mju_copy(d_->qpos, q.data(), m_->nq);
-  mju_copy(d_->qvel, v.data(), m_->nv);
+  for (int i = 0; i < nv(); ++i) {
+    const int dof = dof_of_[static_cast<std::size_t>(i)];
+    d_->qpos[m_->jnt_qposadr[m_->dof_jntid[dof]]] = q[i];
+    d_->qvel[dof] = v[i];
+  }
+  for (std::size_t k = 0; k < held_.joints.size(); ++k) {
+    d_->qpos[held_.qpos_of[k]] = held_.q[static_cast<Eigen::Index>(k)];
+  }
+  // the held joints' actuators at their controls, their activations at rest
+  for (std::size_t k = 0; k < held_.actuators.size(); ++k) {
+    const int u = held_.actuators[k];
+    d_->ctrl[u] = held_.ctrl[static_cast<Eigen::Index>(k)];
+    const int first_act = m_->nu - m_->na;
+    if (m_->actuator_dyntype[u] != mjDYN_NONE && u >= first_act) d_->act[u - first_act] = d_->ctrl[u];
+  }
   mj_forward(m_.get(), d_.get());
   contact_steps_ = 0;
   max_contact_force_ = 0;
@@ -49,12 +90,12 @@ void Plant::reset(const VecX<double>& q, const VecX<double>& v) {
 void Plant::apply(const VecX<double>& tau) {
   // a passive joint gets nothing, whatever τ holds there
   if (actuation_.direct) {
-    mju_copy(d_->qfrc_applied, tau.data(), m_->nv);
-    for (int i : actuation_.passive_dofs) d_->qfrc_applied[i] = 0;
+    for (int i = 0; i < nv(); ++i) d_->qfrc_applied[dof_of_[static_cast<std::size_t>(i)]] = tau[i];
+    for (int i : actuation_.passive_dofs) d_->qfrc_applied[dof_of_[static_cast<std::size_t>(i)]] = 0;
   } else {
-    for (int i = 0; i < m_->nv; ++i) {
+    for (int i = 0; i < nv(); ++i) {
       const int u = actuation_.actuator_of_dof[i];
-      if (u >= 0) d_->ctrl[u] = tau[i] * actuation_.ctrl_per_torque[i];
+      if (u >= 0) d_->ctrl[actuator_of_[static_cast<std::size_t>(u)]] = tau[i] * actuation_.ctrl_per_torque[i];
     }
   }
 }
@@ -92,7 +133,7 @@ bool Plant::step(const VecX<double>& tau_before, int switch_at, const VecX<doubl
     if (reason) *reason = "MuJoCo warning during mj_step (e.g. huge or non-finite acceleration)";
     return false;
   }
-  if (!q().allFinite() || !v().allFinite()) {
+  if (!full_q().allFinite() || !Eigen::Map<const VecX<double>>(d_->qvel, m_->nv).allFinite()) {
     if (reason) *reason = "non-finite plant state";
     return false;
   }

@@ -86,12 +86,17 @@ std::string joint_list(const std::vector<std::string>& names) {
 
 TaskRun::TaskRun(const Task& task)
     : task_(task),
-      loaded_(load_model_translated(task.model)),
-      imported_(import_model(loaded_.model.get(), task.model, import_options(task, loaded_))),
+      // the joints the controller holds (hold.hpp) where the start's keyframe has them, else at
+      // qpos0; none with direct torques, which drive every joint
+      models_(load_controller_model(task.model, task.q0_rule == "home" ? task.q0_rule : "", !task.direct_torque)),
+      imported_(import_model(mj_model(), task.model, import_options(task, models_.controller()))),
       model_(std::make_shared<const Model>(imported_.model)),
       resolved_(resolve(task, model_->n)) {
-  const mjModel* m = loaded_.model.get();
-  if (resolved_.q0.size() == 0) resolved_.q0 = keyframe_qpos(m, task.q0_rule, task.model);
+  const mjModel* m = mj_model();
+  if (resolved_.q0.size() == 0) {
+    const VecX<double> key = keyframe_qpos(plant_model(), task.q0_rule, task.model);
+    resolved_.q0 = held().empty() ? key : held().controlled(key);
+  }
   if (task.qref_start) resolved_.controller.q_ref = resolved_.q0;
   set_up_references();
 
@@ -111,7 +116,7 @@ TaskRun::TaskRun(const Task& task)
   // the controller's settings: the task's, with what needs the model (the horizon's passive
   // forces, formulations.md §Passive forces; its "auto" choices, the same for both formulations,
   // are the Controller's: horizon_setup.hpp)
-  plant_ = std::make_unique<Plant>(m, imported_.actuation);
+  plant_ = std::make_unique<Plant>(plant_model(), imported_.actuation, held());
   const std::string timestep_warning = plant_->set_control_period(resolved_.controller.cgmres.dt);
   ControllerSettings& cs = resolved_.controller;
   // kmax "auto": more GMRES iterations for an under-actuated model's stages (task.hpp); the
@@ -135,7 +140,8 @@ TaskRun::TaskRun(const Task& task)
   const HorizonSetup& setup = *controller_->horizon_setup();
 
   // what the run does not model, had to change or chose by itself
-  if (!loaded_.translations.empty()) notices_.push_back(loaded_.notice());
+  if (!models_.full.translations.empty()) notices_.push_back(models_.full.notice());
+  if (!held().empty()) notices_.push_back(held().notice(plant_model()));
   notices_.insert(notices_.end(), imported_.notices.begin(), imported_.notices.end());
   notices_.insert(notices_.end(), setup.notes.begin(), setup.notes.end());
   notices_.insert(notices_.end(), auto_notes_.begin(), auto_notes_.end());
@@ -161,7 +167,7 @@ void TaskRun::set_up_references() {
   VecX<double> start = resolved_.controller.q_ref;
   if (task.target) {
     const FrameTask& f = *task.target;
-    const mjModel* m = loaded_.model.get();
+    const mjModel* m = mj_model();
     FrameTarget target;
     target.frame = import_frame(m, f.frame, task.model);
     if (target.frame.link < 0) {
@@ -284,6 +290,8 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.Qv.assign(chosen.weights.Qv.data(), chosen.weights.Qv.data() + n);
   s.R.assign(chosen.weights.R.data(), chosen.weights.R.data() + n);
   s.unbounded_joints = unbounded_;
+  s.held_joints = held().names;
+  s.held_q.assign(held().q.data(), held().q.data() + held().q.size());
   s.torque_lower.assign(lower_.data(), lower_.data() + n);
   s.torque_upper.assign(upper_.data(), upper_.data() + n);
   s.saturated_steps = result.saturated_steps;

@@ -20,6 +20,7 @@
 
 #include "idmpc/experiment/run_record.hpp"
 #include "idmpc/mujoco/closed_loop.hpp"
+#include "idmpc/mujoco/hold.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
 #include "idmpc/mujoco/plant.hpp"
@@ -40,7 +41,13 @@ class TaskRun {
   const Task& task() const { return task_; }
   /// @brief The task made concrete on the model (q0 filled in from the keyframe if asked).
   const ResolvedTask& resolved() const { return resolved_; }
-  const mjModel* mj_model() const { return loaded_.model.get(); }
+  /// @brief The controller's MuJoCo model: the task's, with the held joints welded if it has
+  /// any (hold.hpp); its dofs are the controller's.
+  const mjModel* mj_model() const { return models_.model(); }
+  /// @brief The plant's MuJoCo model: the task's, as loaded.
+  const mjModel* plant_model() const { return models_.full.model.get(); }
+  /// @brief The joints the controller holds (none for most arms).
+  const HeldJoints& held() const { return models_.held; }
   /// @brief The imported rigid-body model (no friction; the plant's joints).
   const Model& model() const { return *model_; }
   std::shared_ptr<const Model> shared_model() const { return model_; }
@@ -89,7 +96,7 @@ class TaskRun {
   void set_up_references();
 
   Task task_;
-  LoadedModel loaded_;
+  ControllerModel models_;
   ImportedModel imported_;
   std::shared_ptr<const Model> model_;
   ResolvedTask resolved_;

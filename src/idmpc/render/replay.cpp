@@ -24,7 +24,7 @@ std::size_t Replay::pose_row(double t) const {
 void set_pose(const mjModel* m, mjData* d, const Replay& replay, double t) {
   const std::size_t row = replay.pose_row(t);
   if (row < replay.log->rows()) {
-    std::copy(replay.log->q_row(row), replay.log->q_row(row) + m->nq, d->qpos);
+    log_pose(*replay.log, row, m, d->qpos);
   } else {
     std::copy(m->qpos0, m->qpos0 + m->nq, d->qpos);
   }
