@@ -120,6 +120,28 @@ TEST(HeldJoints, TheWeldedModelIsTheWholeModelWithTheFingersHeld) {
   }
 }
 
+// a Robotiq 2F-85 on a UR5e (tests/mujoco/fixtures/ur5e_2f85.xml): the tendon moves the two
+// drivers; their joint equality, and the connect equalities that close each four-bar linkage,
+// bring in the couplers, spring links and followers: all eight joints held. The welded model is
+// the whole one's rows, and its connect equalities, now within one rigid body, are not reported as
+// unmodeled
+TEST(HeldJoints, AClosedLinkageGripperIsHeldWhole) {
+  const std::string file = IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/ur5e_2f85.xml";
+  const mj::ControllerModel models = mj::load_controller_model(file, "home");
+  const std::vector<std::string> expected = {"right_driver_joint", "right_coupler_joint", "right_spring_link_joint",
+                                             "right_follower_joint", "left_driver_joint", "left_coupler_joint",
+                                             "left_spring_link_joint", "left_follower_joint"};
+  EXPECT_EQ(models.held.names, expected);
+  ASSERT_EQ(models.model()->nv, 6);
+  const mj::ImportedModel imported = mj::import_model(models.model(), file);
+  for (const auto& e : mj::check_held(models.full.model.get(), models.held, imported.model, 10, 5)) {
+    EXPECT_TRUE(e.ok()) << e.quantity << " " << e.worst;
+  }
+  for (const std::string& item : imported.unmodeled) {
+    EXPECT_EQ(item.find("equality"), std::string::npos) << item;
+  }
+}
+
 // a held joint may carry held joints only, and a body's joints are held all or none
 TEST(HeldJoints, AHeldJointCarryingADrivenJointIsRefusedNamingBoth) {
   const std::string path = write_model("gripper_carrying.xml", gripper_arm(true));

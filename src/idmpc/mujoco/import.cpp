@@ -472,7 +472,14 @@ std::vector<std::string> unmodeled_features(const mjModel* m) {
                   ") as a constraint with stiction (the horizon has it as smooth friction)");
   }
   if (m->ntendon > 0) out.push_back(std::to_string(m->ntendon) + " tendon(s)");
-  if (m->neq > 0) out.push_back(std::to_string(m->neq) + " equality constraint(s)");
+  // an equality between two bodies of one rigid body (a held gripper's closed linkage, welded)
+  // does nothing
+  int equalities = 0;
+  for (int e = 0; e < m->neq; ++e) {
+    const bool bodies = m->eq_type[e] == mjEQ_CONNECT || m->eq_type[e] == mjEQ_WELD;
+    equalities += !(bodies && m->body_weldid[m->eq_obj1id[e]] == m->body_weldid[std::max(m->eq_obj2id[e], 0)]);
+  }
+  if (equalities > 0) out.push_back(std::to_string(equalities) + " equality constraint(s)");
   if (m->opt.density > 0 || m->opt.viscosity > 0) out.push_back("fluid forces (density/viscosity)");
   return out;
 }
