@@ -3,8 +3,8 @@
 target reaches, under FD and ID, on arms nobody tuned anything for.
 
 Usage: arm_population.py [--arms K] [--seed S] [--idmpc BUILD/src/idmpc] [--jobs J]
-                         [--solver cgmres|riccati] [--out docs/reference/arm_population.md]
-                         [--keep DIR]
+                         [--solver cgmres|riccati] [--task reach|circle]
+                         [--out docs/reference/arm_population.md] [--keep DIR]
 
 Each arm is a fixed-base serial chain written here as MJCF, drawn at random (seeded):
 - 2–7 hinges: the first about the vertical, the next alternately about the two horizontal axes
@@ -25,6 +25,11 @@ The task file holds only the model, q0 and qref; every other setting is the defa
 (docs/tasks.md). Reached: max|q − q_ref| < 5e-3 rad at the end of the default 6 s, without
 divergence; the plant never receives more than the actuator range (its clamp), and the table
 counts the runs where the horizon's torques left the range.
+
+--task circle: the same arms, the task the arm's tip site ("tip", at the end of the last link)
+following a circle of 5 cm radius at 0.5 Hz from q0 (qref "q0"; the circle's plane, direction and
+orientation weight the defaults'); reached: the RMS position error over the last half of the 6 s
+run (from the log's x, y, z against x_ref, y_ref, z_ref) below 5 mm, without divergence.
 """
 import argparse
 import concurrent.futures
@@ -151,20 +156,52 @@ def mjcf(arm, name):
     return "\n".join(lines) + "\n"
 
 
+CIRCLE_TOLERANCE = 5e-3  # [m] RMS over the last half of the run
+
+
+def task_of(arm, name, kind):
+    """The task file's content: reach the arm's qref, or its tip follows a circle from q0."""
+    task = {"schema": "idmpc-task/1", "model": name + ".xml", "q0": arm["q0"]}
+    if kind == "reach":
+        task["qref"] = arm["qref"]
+    else:
+        task.update({"qref": "q0", "target": {"frame": "tip"},
+                     "reference": {"shape": "circle", "radius": 0.05, "frequency": 0.5}})
+    return task
+
+
+def last_half_rms(log):
+    """RMS of |x − x_ref| over the rows of the second half of a run's log [m]."""
+    with open(log) as f:
+        header = f.readline().strip().split(",")
+        rows = [line.strip().split(",") for line in f if line.strip()]
+    col = {name: header.index(name) for name in ("t", "x", "y", "z", "x_ref", "y_ref", "z_ref")}
+    t_end = float(rows[-1][col["t"]])
+    sq = [sum((float(r[col[a]]) - float(r[col[a + "_ref"]])) ** 2 for a in "xyz")
+          for r in rows if float(r[col["t"]]) >= t_end / 2]
+    return math.sqrt(sum(sq) / len(sq)) if sq else float("nan")
+
+
 def run_one(job):
-    idmpc, workdir, name, formulation, solver = job
+    idmpc, workdir, name, formulation, solver, kind = job
     task = os.path.join(workdir, name + ".json")
     summary = os.path.join(workdir, "%s_%s.summary.json" % (name, formulation))
+    log = os.path.join(workdir, "%s_%s.csv" % (name, formulation))
     args = [idmpc, "swingup", "--task", task, "--quiet", "--formulation", formulation, "--solver", solver,
-            "--summary", summary]
+            "--summary", summary] + (["--log", log] if kind == "circle" else [])
     proc = subprocess.run(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     if proc.returncode not in (0, 2, 3):
         return {"name": name, "formulation": formulation, "error": proc.stderr.strip().splitlines()[-1:]}
     with open(summary) as f:
         s = json.load(f)
-    return {"name": name, "formulation": formulation, "reached": s["reached"], "diverged": s["diverged"],
-            "final": s["final_q_error"], "excess": s.get("max_constraint_violation", 0.0),
-            "p50_ms": s["p50_update_ms"], "notices": s.get("notices", [])}
+    out = {"name": name, "formulation": formulation, "reached": s["reached"], "diverged": s["diverged"],
+           "final": s["final_q_error"], "excess": s.get("max_constraint_violation", 0.0),
+           "p50_ms": s["p50_update_ms"], "notices": s.get("notices", [])}
+    if kind == "circle":
+        # the last half's RMS: the circle settled after the start and the default 1 s ramp
+        out["final"] = float("nan") if s["diverged"] else last_half_rms(log)
+        out["reached"] = not s["diverged"] and out["final"] < CIRCLE_TOLERANCE
+    return out
 
 
 def main():
@@ -173,6 +210,7 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--solver", choices=["cgmres", "riccati"], default="cgmres")
+    ap.add_argument("--task", choices=["reach", "circle"], default="reach")
     ap.add_argument("--idmpc", default=os.path.join(ROOT, "build", "src", "idmpc"))
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "reference", "arm_population.md"))
     ap.add_argument("--keep", help="write the arms and their tasks here (else a temporary directory)")
@@ -191,9 +229,9 @@ def main():
             with open(os.path.join(work, name + ".xml"), "w") as f:
                 f.write(mjcf(arm, name))
             with open(os.path.join(work, name + ".json"), "w") as f:
-                json.dump({"schema": "idmpc-task/1", "model": name + ".xml", "q0": arm["q0"], "qref": arm["qref"]}, f)
+                json.dump(task_of(arm, name, a.task), f)
             for formulation in ("fd", "id"):
-                jobs.append((a.idmpc, work, name, formulation, a.solver))
+                jobs.append((a.idmpc, work, name, formulation, a.solver, a.task))
         results = {}
         with concurrent.futures.ThreadPoolExecutor(max_workers=a.jobs) as pool:
             for r in pool.map(run_one, jobs):
@@ -212,14 +250,18 @@ def write_report(a, arms, results):
         return "%d/%d" % (ok, len(runs))
 
     names = ["arm%03d" % i for i in range(len(arms))]
-    lines = ["# Generated arms with the defaults", "",
-             "Generated by `tools/arm_population.py --arms %d --seed %d --solver %s` on %s, %d cores. "
+    circle = a.task == "circle"
+    task_text = ("the tip follows a circle of 5 cm radius at 0.5 Hz from the start (the task: the model, the start, "
+                 "the frame and the circle); reached: RMS position error below 5 mm over the last half of the 6 s run"
+                 if circle else "each task only the model, the start and a joint target 0.3–1 rad away per joint; "
+                 "reached: within 5e-3 rad at 6 s")
+    lines = ["# Generated arms with the defaults" + (": circle tracking" if circle else ""), "",
+             "Generated by `tools/arm_population.py --arms %d --seed %d --solver %s --task %s` on %s, %d cores. "
              "%d arms drawn at random (the script's docstring gives the distributions: 2–7 dof, masses from "
              "about 0.03 to 40 kg per link, armature, damping, torque motors or position servos with and without "
              "forcerange, a third with gravity compensation on all or some links, a third starting stretched at a "
-             "singular configuration), each task only the model, "
-             "the start and a joint target 0.3–1 rad away per joint; reached: within 5e-3 rad at 6 s."
-             % (a.arms, a.seed, a.solver, cpu_model(), os.cpu_count(), len(arms)), ""]
+             "singular configuration); %s."
+             % (a.arms, a.seed, a.solver, a.task, cpu_model(), os.cpu_count(), len(arms), task_text), ""]
     lines += ["| | FD reached | ID reached |", "|---|---|---|"]
     lines.append("| all arms | %s | %s |" % (rate([(n, "fd") for n in names]), rate([(n, "id") for n in names])))
 
@@ -252,6 +294,8 @@ def write_report(a, arms, results):
             return "refused: " + " ".join(r["error"])
         if r["reached"]:
             return "reached"
+        if circle:
+            return "diverged" if r["diverged"] else "not reached (%.2g mm)" % (1e3 * r["final"])
         return ("diverged" if r["diverged"] else "not reached") + " (%.2g rad)" % r["final"]
 
     for nm, arm in zip(names, arms):

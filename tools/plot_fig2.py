@@ -26,7 +26,7 @@ from matplotlib.lines import Line2D  # noqa: E402
 LINESTYLES = ["-", "--", ":", "-."]
 
 
-from run_record import LogError, read_log  # noqa: E402
+from run_record import LogError, read_log, read_summary  # noqa: E402
 
 
 def joint_colours(n):
@@ -42,10 +42,37 @@ def positive_or_nan(xs):
     return [abs(x) if math.isfinite(x) and x != 0 else math.nan for x in xs]
 
 
-def draw(logs, residual, title):
+def units(types, names=None):
+    """Axis labels for joints of these kinds ("hinge", "slide"; None: hinges), naming the slides
+    of a mixed model by `names` (else by index)."""
+    slides = [j for j, kind in enumerate(types or []) if kind == "slide"]
+    if not slides:
+        return "joint angle [rad]", "joint velocity [rad/s]", "torque [N m]"
+    if len(slides) == len(types):
+        return "joint position [m]", "joint velocity [m/s]", "force [N]"
+    which = ", ".join(names[j] if names and len(names) == len(types) else f"joint {j}" for j in slides)
+    return (f"joint position [rad; m: {which}]", f"joint velocity [rad/s; m/s: {which}]",
+            f"torque [N m; force in N: {which}]")
+
+
+def joints_of(log_path):
+    """The joints' names and kinds from the run summary beside a log (same path, .json), or
+    (None, None)."""
+    summary = os.path.splitext(log_path)[0] + ".json"
+    if not os.path.exists(summary):
+        return None, None
+    try:
+        s = read_summary(summary)
+    except LogError:
+        return None, None
+    return s.get("joint_names"), s.get("joint_types")
+
+
+def draw(logs, residual, title, names=None, types=None):
     n_max = max(log.n for log in logs)
     colours = joint_colours(n_max)
-    panels = [("q", "joint angle [rad]"), ("v", "joint velocity [rad/s]"), ("u", "torque [Nm]")]
+    q_label, v_label, u_label = units(types, names)
+    panels = [("q", q_label), ("v", v_label), ("u", u_label)]
     if residual:
         panels.append(("residual", "optimality residual"))
     fig, axes = plt.subplots(len(panels), 1, sharex=True, figsize=(8, 2.4 * len(panels) + 0.8),
@@ -66,7 +93,8 @@ def draw(logs, residual, title):
     # legends: joints by colour on the top panel, logs by line style when several are overlaid
     if n_max <= 16:
         handles = [Line2D([], [], color=colours[j], lw=2) for j in range(n_max)]
-        axes[0].legend(handles, [f"joint {j}" for j in range(n_max)], loc="upper right",
+        labels = names if names and len(names) == n_max else [f"joint {j}" for j in range(n_max)]
+        axes[0].legend(handles, labels, loc="upper right",
                        ncol=min(n_max, 8), fontsize="small", framealpha=0.85)
     else:
         axes[0].set_title(f"colour: joint 0 (purple) to joint {n_max - 1} (yellow)",
@@ -115,7 +143,8 @@ def main(argv=None):
     except LogError as err:
         print(f"plot_fig2.py: {err}", file=sys.stderr)
         return 1
-    fig = draw(logs, args.residual, args.title)
+    # the joints' names and kinds (units) from the first log's summary, when it has one
+    fig = draw(logs, args.residual, args.title, *joints_of(args.logs[0]))
     try:
         save_atomically(fig, args.output, args.dpi)
     except OSError as err:

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "idmpc/mujoco/check.hpp"
 #include "idmpc/mujoco/hold.hpp"
 #include "idmpc/mujoco/load.hpp"
@@ -170,6 +172,13 @@ TEST(HeldJoints, ThePandaReachesWithItsFingersHeldByTheirServo) {
   const RunSummary s = run.summary(r);
   EXPECT_EQ(s.held_joints, (std::vector<std::string>{"finger_joint1", "finger_joint2"}));
   EXPECT_EQ(s.held_q, (std::vector<double>{0.04, 0.04}));
+  // the log's joints by name and kind, and the solver, in the summary's JSON
+  const nlohmann::json j = to_json(s);
+  EXPECT_EQ(j.at("solver"), "cgmres");
+  EXPECT_EQ(j.at("joint_names").size(), 7u);
+  EXPECT_EQ(j.at("joint_names")[0], "joint1");
+  EXPECT_EQ(j.at("joint_types"), nlohmann::json(std::vector<std::string>(7, "hinge")));
+  EXPECT_EQ(summary_from_json(j, "test").held_joints, s.held_joints);
   bool said = false;
   for (const auto& n : run.notices()) said = said || n.find("'finger_joint1' at 0.04") != std::string::npos;
   EXPECT_TRUE(said) << "a notice names the held joints";

@@ -74,6 +74,10 @@ TEST(UnderActuatedFormulations, ConvergedStartsCommandTheSameTorque) {
   }
   EXPECT_EQ(torque[0][1], 0.0);
   EXPECT_NEAR(torque[1][1], 0.0, 1e-9) << "ID's passive torque is its constraint's residual";
+  // the summary names the cart's slide and the pole's hinge (units: m and N, rad and N m)
+  mj::TaskRun run(cartpole_task(Formulation::kInverseDynamics));
+  const RunSummary s = run.summary(mj::RunResult{});
+  EXPECT_EQ(s.joint_types, (std::vector<std::string>{"slide", "hinge"}));
   EXPECT_NEAR(torque[0][0], torque[1][0], 1e-8 * std::max(1.0, std::abs(torque[0][0])))
       << "FD " << torque[0].transpose() << ", ID " << torque[1].transpose();
 }

@@ -318,7 +318,12 @@ nlohmann::json to_json(const RunSummary& s) {
   nlohmann::json j;
   j["schema"] = s.schema;
   j["task"] = to_json(s.task);
+  j["solver"] = s.task.solver;  // the task leaves out the default, C/GMRES
   j["n"] = s.n;
+  if (!s.joint_names.empty()) {
+    j["joint_names"] = s.joint_names;
+    j["joint_types"] = s.joint_types;
+  }
   j["simd_stages"] = s.simd_stages;
   j["zeta"] = s.zeta;
   j["steps"] = s.steps;
@@ -449,7 +454,8 @@ constexpr SummaryField kSummaryFields[] = {
     {"torque_lower", Kind::kNumbersOrNulls, true}, {"torque_upper", Kind::kNumbersOrNulls, true},
     {"saturated_steps", Kind::kIntegers, true}, {"saturated_any", Kind::kInteger, true},
     {"max_constraint_violation", Kind::kNumberOrNull, false}, {"model_hash", Kind::kString, false},
-    {"log_hash", Kind::kString, false}, {"held_joints", Kind::kStrings, false}, {"held_q", Kind::kNumbers, false}};
+    {"log_hash", Kind::kString, false}, {"held_joints", Kind::kStrings, false}, {"held_q", Kind::kNumbers, false},
+    {"solver", Kind::kString, false}, {"joint_names", Kind::kStrings, false}, {"joint_types", Kind::kStrings, false}};
 
 void check_summary_fields(const nlohmann::json& j, const std::string& where) {
   for (const SummaryField& f : kSummaryFields) {
@@ -569,6 +575,8 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     if (j.contains("max_constraint_violation")) s.max_constraint_violation = number("max_constraint_violation");
     if (j.contains("model_hash")) s.model_hash = j.at("model_hash").get<std::string>();
     if (j.contains("log_hash")) s.log_hash = j.at("log_hash").get<std::string>();
+    s.joint_names = j.value("joint_names", std::vector<std::string>{});
+    s.joint_types = j.value("joint_types", std::vector<std::string>{});
     s.held_joints = j.value("held_joints", std::vector<std::string>{});
     s.held_q = j.value("held_q", std::vector<double>{});
     if (s.held_q.size() != s.held_joints.size()) {

@@ -92,6 +92,9 @@ struct RunSummary {
   std::vector<double> friction_velocity;  ///< ε of the horizon's smooth friction (0: none)
   std::vector<double> Qq, Qv, R;   ///< the weights as run ("auto" resolved)
   std::vector<std::string> unbounded_joints;  ///< joints without a declared torque limit
+  /// @brief The controller's joints, in the log's column order, and their kinds ("hinge": q in
+  /// rad, u in N m; "slide": m and N)
+  std::vector<std::string> joint_names, joint_types;
   /// @brief Joints the controller held (a gripper's fingers, hold.hpp), not in the log's q,
   /// and where it held them
   std::vector<std::string> held_joints;

@@ -290,6 +290,8 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.Qv.assign(chosen.weights.Qv.data(), chosen.weights.Qv.data() + n);
   s.R.assign(chosen.weights.R.data(), chosen.weights.R.data() + n);
   s.unbounded_joints = unbounded_;
+  s.joint_names = model_->joint_names;
+  for (const JointType type : model_->joint_type) s.joint_types.push_back(type == JointType::kPrismatic ? "slide" : "hinge");
   s.held_joints = held().names;
   s.held_q.assign(held().q.data(), held().q.data() + held().q.size());
   s.torque_lower.assign(lower_.data(), lower_.data() + n);
