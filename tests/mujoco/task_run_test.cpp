@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -278,6 +279,34 @@ TEST(TaskRun, APlanarArmsCircleLiesInItsPlaneAndRunsCounterClockwiseOnCamera) {
     }
     run.reference()->sample(0.1, p, rate);
     EXPECT_LT(p[0], p0[0] - 1e-3) << normal;
+  }
+}
+
+// an arm of two joints (a yaw and a pitch) moves its tip on a sphere about the pitch axis' pivot:
+// its circle lies in the sphere's tangent plane at the start, the plane whose normal is the
+// radius to the tip (within 1e-9 of it at every time)
+TEST(TaskRun, ATwoJointArmsCircleLiesInTheTangentPlaneOfItsSurface) {
+  const std::string model = ::testing::TempDir() + "yaw_pitch.xml";
+  std::ofstream(model) << R"(<mujoco><worldbody>
+    <body pos="0 0 0.2"><joint name="yaw" axis="0 0 1"/><inertial pos="0 0 0.05" mass="2" diaginertia="0.02 0.02 0.002"/>
+      <body pos="0 0 0.16"><joint name="pitch" axis="0 1 0"/><inertial pos="0 0 0.15" mass="1.5" diaginertia="0.1 0.1 0.001"/>
+        <site name="tip" pos="0 0 0.3"/></body></body></worldbody>
+    <actuator><motor joint="yaw" ctrlrange="-20 20"/><motor joint="pitch" ctrlrange="-20 20"/></actuator></mujoco>)";
+  Task task = task_from_json(nlohmann::json::parse(R"({"q0": [0.3, 0.7], "qref": "q0", "duration": 0.01,
+      "target": {"frame": "tip"}, "reference": {"shape": "circle", "radius": 0.05, "frequency": 0.5, "ramp": 0}})"),
+                             "two joints", arm_defaults());
+  task.model = model;
+  const mj::TaskRun run(task);
+  ASSERT_TRUE(run.reference());
+  VecX<double> p0(3), p(3), rate(3);
+  run.reference()->sample(0.0, p0, rate);
+  const Vec3<double> pivot(0, 0, 0.36);
+  const Vec3<double> radial = (Vec3<double>(p0) - pivot).normalized();
+  EXPECT_NEAR((Vec3<double>(p0) - pivot).norm(), 0.3, 1e-12) << "the tip";
+  for (const double t : {0.2, 0.5, 1.0, 1.7}) {
+    run.reference()->sample(t, p, rate);
+    EXPECT_NEAR(radial.dot(Vec3<double>(p - p0)), 0.0, 1e-9) << "t = " << t;
+    EXPECT_GT((p - p0).norm(), 1e-3) << "t = " << t;
   }
 }
 

@@ -60,20 +60,25 @@ int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<doubl
   return rank;
 }
 
-// the direction the frame's position cannot move in, when its position Jacobian has rank 2 at q
-// and beside it (a planar arm): the normal of the plane it moves in, signed towards where the
-// automatic camera looks at such a motion from (−y for the x–z plane, −x for y–z, +z, above,
-// for a horizontal plane), so that a circle about it runs counter-clockwise in the video
+// the direction the frame's position cannot move in, when its position Jacobian has rank 2: at q
+// and beside it (a planar arm: the normal of the plane it moves in), or else at q (an arm of two
+// joints, whose frame moves on a curved surface, or a start at a singular pose: the plane it moves
+// in at first order). Signed towards where the automatic camera looks at such a motion from (−y
+// for the x–z plane, −x for y–z, +z, above, for a horizontal plane), so that a circle about it
+// runs counter-clockwise in the video
 std::optional<Vec3<double>> motion_plane_normal(const Model& model, const Frame& frame, const VecX<double>& q) {
-  const MatX<double> Jp = jacobians_at_and_beside(model, frame, q).topRows<3>();
-  const Eigen::JacobiSVD<MatX<double>> svd(Jp, Eigen::ComputeFullU);
-  const VecX<double>& sigma = svd.singularValues();
-  if (!(sigma[0] > 0) || sigma[1] <= 1e-6 * sigma[0] || sigma[2] > 1e-6 * sigma[0]) return std::nullopt;
-  Vec3<double> n = svd.matrixU().col(2);
-  Eigen::Index axis = 0;
-  n.cwiseAbs().maxCoeff(&axis);
-  const double towards_camera = axis == 2 ? n[2] : -n[axis];
-  return towards_camera < 0 ? Vec3<double>(-n) : n;
+  const MatX<double> both = jacobians_at_and_beside(model, frame, q).topRows<3>();
+  for (const MatX<double>& Jp : {both, MatX<double>(both.leftCols(model.n))}) {
+    const Eigen::JacobiSVD<MatX<double>> svd(Jp, Eigen::ComputeFullU);
+    const VecX<double>& sigma = svd.singularValues();
+    if (!(sigma[0] > 0) || (sigma.array() > 1e-6 * sigma[0]).count() != 2) continue;
+    Vec3<double> n = svd.matrixU().col(2);
+    Eigen::Index axis = 0;
+    n.cwiseAbs().maxCoeff(&axis);
+    const double towards_camera = axis == 2 ? n[2] : -n[axis];
+    return towards_camera < 0 ? Vec3<double>(-n) : n;
+  }
+  return std::nullopt;
 }
 
 std::string joint_list(const std::vector<std::string>& names) {
