@@ -314,6 +314,10 @@ void bind_control(py::module_& m) {
           py::arg("tau"), "Applies tau for one control period: (True, \"\"), or (False, why the simulation failed).")
       .def_property_readonly("q", [](const mj::Plant& p) -> Vector { return p.q(); })
       .def_property_readonly("v", [](const mj::Plant& p) -> Vector { return p.v(); })
+      .def_property_readonly(
+          "full_q", [](const mj::Plant& p) -> Vector { return p.full_q(); },
+          "the whole model's qpos, the joints the controller holds (a gripper's fingers) included; q and v are "
+          "the controller's joints")
       .def_property_readonly("time", &mj::Plant::time)
       .def_property_readonly("contact_steps", &mj::Plant::contact_steps)
       .def_property_readonly("max_contact_force", &mj::Plant::max_contact_force);

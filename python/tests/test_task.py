@@ -163,3 +163,17 @@ def test_each_attribute_is_its_own_field(name):
                 value = value[key]
             assert value == 1000.0 + i, attribute
             assert json.dumps(after).count(str(1000.0 + i)) == 1, attribute
+
+
+def test_a_held_gripper_is_outside_the_controllers_coordinates():
+    """The Panda with its hand: the controller and the plant's q have the arm's 7 joints, the
+    plant's whole qpos also the two fingers, held open by their servo."""
+    task = idmpc.load_task(str(MJCF / "panda_hand_reach.json"))
+    task.duration = 0.2
+    run = idmpc.TaskRun(task)
+    result = run.run()
+    assert run.plant.nv == 7
+    assert run.plant.q.shape == (7,)
+    assert run.plant.full_q.shape == (9,)
+    assert np.allclose(run.plant.full_q[7:], 0.04, atol=1e-3)
+    assert result["summary"]["held_joints"] == ["finger_joint1", "finger_joint2"]
