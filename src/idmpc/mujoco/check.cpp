@@ -42,6 +42,22 @@ ModelPtr as_modeled(const mjModel* m) {
   return copy;
 }
 
+// vectors of n values uniform in [−scale, scale], drawn from one seeded generator
+class RandomStates {
+ public:
+  RandomStates(int n, unsigned seed) : n_(n), rng_(seed) {}
+  VecX<double> operator()(double scale) {
+    VecX<double> x(n_);
+    for (int i = 0; i < n_; ++i) x[i] = scale * unit_(rng_);
+    return x;
+  }
+
+ private:
+  int n_;
+  std::mt19937 rng_;
+  std::uniform_real_distribution<double> unit_{-1.0, 1.0};
+};
+
 }  // namespace
 
 std::vector<std::string> reference_simplifications(const mjModel* m) {
@@ -57,13 +73,7 @@ std::vector<CheckEntry> check_model(const mjModel* m, const Model& model, int sa
   Reference ref(reference_model.get());
   Data data(model);
   const int n = model.n;
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  auto random = [&](double scale) {
-    VecX<double> x(n);
-    for (int i = 0; i < n; ++i) x[i] = scale * unit(rng);
-    return x;
-  };
+  RandomStates random(n, seed);
 
   std::vector<CheckEntry> entries = {
       {"ID vs mj_inverse", 0, tol.mujoco},
@@ -143,13 +153,7 @@ std::vector<CheckEntry> check_held(const mjModel* full, const HeldJoints& held, 
     throw std::invalid_argument("check_held: the model has " + std::to_string(n) + " dofs, the held model " +
                                 std::to_string(held.dof_of.size()));
   }
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  auto random = [&](double scale) {
-    VecX<double> x(n);
-    for (int i = 0; i < n; ++i) x[i] = scale * unit(rng);
-    return x;
-  };
+  RandomStates random(n, seed);
   // the held joints where held, at rest
   auto embed = [&](const VecX<double>& x) {
     VecX<double> out = VecX<double>::Zero(full->nv);

@@ -95,12 +95,7 @@ std::vector<int> joints_to_hold(const mjModel* m, const std::string& source) {
   for (int u = 0; u < m->nu; ++u) any_other = any_other || !joint_transmission(m, u);
   if (any_other) {
     // the joints each other actuator moves at qpos0
-    const DataPtr d = make_data(m);
-    mju_copy(d->qpos, m->qpos0, m->nq);
-    mj_kinematics(m, d.get());
-    mj_comPos(m, d.get());
-    mj_tendon(m, d.get());
-    mj_transmission(m, d.get());
+    const DataPtr d = transmission_at(m, m->qpos0);
     for (int u = 0; u < m->nu; ++u) {
       if (joint_transmission(m, u)) continue;
       std::vector<int> moved;
@@ -199,12 +194,7 @@ HeldJoints hold_joints(const mjModel* m, const std::vector<int>& joints, const V
     if (!held[static_cast<std::size_t>(m->dof_jntid[i])]) h.dof_of.push_back(i);
   }
   // the actuator lengths with the arm where qpos has it and the fingers at rest
-  const DataPtr d = make_data(m);
-  mju_copy(d->qpos, qpos.data(), m->nq);
-  mj_kinematics(m, d.get());
-  mj_comPos(m, d.get());
-  mj_tendon(m, d.get());
-  mj_transmission(m, d.get());
+  const DataPtr d = transmission_at(m, qpos.data());
   std::vector<double> ctrl;
   for (int u = 0; u < m->nu; ++u) {
     const int id = m->actuator_trnid[2 * u];

@@ -192,12 +192,7 @@ std::vector<bool> actuated_dofs(const mjModel* m) {
     }
   }
   if (other) {
-    const DataPtr d = make_data(m);
-    mju_copy(d->qpos, m->qpos0, m->nq);
-    mj_kinematics(m, d.get());
-    mj_comPos(m, d.get());
-    mj_tendon(m, d.get());
-    mj_transmission(m, d.get());
+    const DataPtr d = transmission_at(m, m->qpos0);
     for (int u = 0; u < m->nu; ++u) {
       const int type = m->actuator_trntype[u];
       if (type == mjTRN_JOINT || type == mjTRN_JOINTINPARENT) continue;

@@ -277,6 +277,16 @@ DataPtr make_data(const mjModel* m) {
   return DataPtr(d);
 }
 
+DataPtr transmission_at(const mjModel* m, const mjtNum* qpos) {
+  DataPtr d = make_data(m);
+  mju_copy(d->qpos, qpos, m->nq);
+  mj_kinematics(m, d.get());
+  mj_comPos(m, d.get());
+  mj_tendon(m, d.get());
+  mj_transmission(m, d.get());
+  return d;
+}
+
 std::string object_name(const mjModel* m, mjtObj type, int id) {
   const char* name = mj_id2name(m, type, id);
   if (name && name[0]) return name;

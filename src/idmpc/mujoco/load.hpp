@@ -77,6 +77,10 @@ ModelPtr load_model_from_string(const std::string& xml);
 /// @brief Makes mjData for a model; throws on failure.
 DataPtr make_data(const mjModel* m);
 
+/// @brief mjData at `qpos` (nq values) with the positions, tendons and actuator transmissions
+/// computed (actuator_length, actuator_moment), as MuJoCo's compiler computes them at qpos0.
+DataPtr transmission_at(const mjModel* m, const mjtNum* qpos);
+
 /// @brief Name of an object (joint, body, actuator, ...) or "#id" when it has none.
 std::string object_name(const mjModel* m, mjtObj type, int id);
 
