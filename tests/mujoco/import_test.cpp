@@ -268,6 +268,21 @@ TEST_F(ImportTest, ServosAreReplacedByJointTorquesLimitedByTheirForceRange) {
   EXPECT_EQ(direct.model.n, 3);
 }
 
+// unnamed servos are named "#id" in the notice, and their force ranges are found by that name
+TEST_F(ImportTest, UnnamedServosAreReportedByTheirIndex) {
+  const mj::ModelPtr m = mj::load_model_from_string(chain_mjcf(
+      "", R"(<motor joint="j0" ctrllimited="true" ctrlrange="-1 1"/>
+             <position joint="j1" kp="20" ctrllimited="true" ctrlrange="-1 1" forcelimited="true" forcerange="-5 4"/>
+             <velocity joint="j2" kv="3" forcelimited="true" forcerange="-2 2"/>)"));
+  const mj::ImportedModel imported = mj::import_model(m.get(), "unnamed.xml");
+  EXPECT_EQ(imported.actuation.replaced_servos, (std::vector<std::string>{"#1", "#2"}));
+  ASSERT_EQ(imported.notices.size(), 1u) << joined(imported.notices);
+  const std::string& notice = imported.notices[0];
+  EXPECT_NE(notice.find("position and velocity servos '#1', '#2' replaced"), std::string::npos) << notice;
+  EXPECT_NE(notice.find("limited by the forcerange × gear of '#1', '#2'"), std::string::npos) << notice;
+  EXPECT_EQ(notice.find("declare no forcerange"), std::string::npos) << notice;
+}
+
 // a servo without a forcerange but with a control range: the torque it gives at rest over its
 // control range and its joint's range (the control range where the joint has none), times the
 // gear; in MuJoCo the force is gain·ctrl + b0 + b1·q + b2·v (position: b1 = −kp; velocity: b2)

@@ -393,7 +393,7 @@ std::vector<std::string> actuation_notices(const mjModel* m, const Actuation& ac
     std::vector<std::string> limited, unlimited;
     bool position = false, velocity = false;
     for (const std::string& name : act.replaced_servos) {
-      const int u = mj_name2id(m, mjOBJ_ACTUATOR, name.c_str());
+      const int u = actuator_id(m, name);
       const mjtNum* b = m->actuator_biasprm + (u >= 0 ? u : 0) * mjNBIAS;
       position = position || b[1] != 0;
       velocity = velocity || (b[1] == 0 && b[2] != 0);

@@ -293,4 +293,13 @@ std::string object_name(const mjModel* m, mjtObj type, int id) {
   return "#" + std::to_string(id);
 }
 
+int actuator_id(const mjModel* m, const std::string& name) {
+  const int id = mj_name2id(m, mjOBJ_ACTUATOR, name.c_str());
+  if (id >= 0) return id;
+  for (int u = 0; u < m->nu; ++u) {
+    if (object_name(m, mjOBJ_ACTUATOR, u) == name) return u;
+  }
+  return -1;
+}
+
 }  // namespace idmpc::mj

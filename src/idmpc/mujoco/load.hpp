@@ -83,5 +83,8 @@ DataPtr transmission_at(const mjModel* m, const mjtNum* qpos);
 
 /// @brief Name of an object (joint, body, actuator, ...) or "#id" when it has none.
 std::string object_name(const mjModel* m, mjtObj type, int id);
+/// @brief The actuator object_name called `name` (one of that name, else "#id" of an unnamed
+/// one), or -1.
+int actuator_id(const mjModel* m, const std::string& name);
 
 }  // namespace idmpc::mj
