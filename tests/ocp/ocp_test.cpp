@@ -12,6 +12,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/reference.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/problems.hpp"
 #include "support/test_models.hpp"
@@ -262,6 +263,66 @@ TEST(OcpTorqueLimits, BadLimitsAreRefusedNamingTheJoint) {
   bad.lower[3] = 1.0;  // lower = upper
   refused(bad, "joint 3");
   refused(good, "joint 2 is [-1, 1]: a bounded joint needs R > 0", 0.0);
+}
+
+// The limits' rows are capped at the input's block (torque_limits.hpp): s_j = min(R_j, C_j)/Δ_j
+// with C the block's diagonal, here recomputed from MuJoCo's mass matrix (mj_fullM). ID's cap
+// binds where R_j exceeds (MᵀRM)_jj + Q_a + c_j; FD's never does (C_j ≥ R_j). The constraint
+// stays the same set: at a torque inside its range the consistent (d, ρ) zero ∂H/∂d and ∂H/∂ρ.
+TEST(OcpTorqueLimits, TheLimitsRowsAreCappedAtTheInputsBlock) {
+  const Problem p = load_problem(IDMPC_SOURCE_DIR "/mjcf/arm4.xml");
+  const int n = 4, N = 25;
+  const double Tf = 0.5, dtau = Tf / N;
+  const VecX<double> q_ref = (VecX<double>(n) << 0.3, -0.7, 1.1, 0.4).finished();
+  const TorqueLimits limits{(VecX<double>(n) << -20, -8, -3, -1).finished(), (VecX<double>(n) << 20, 6, 3, 2).finished()};
+  OcpWeights w = paper_weights(n, 1e-4);
+  w.Qq.setConstant(100);
+  w.Qv.setConstant(10);
+  w.R = (VecX<double>(n) << 1e-3, 1e-2, 30, 300).finished();  // the last one(s) above ID's block
+  mj::Reference ref(p.m.get());
+  const MatX<double> M = ref.mass_matrix(q_ref);
+  const VecX<double> c = dtau * (w.Qq * (Tf * Tf * Tf / 3) + w.Qv * Tf);
+  for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    SCOPED_TRACE(to_string(f));
+    OcpProblem problem(p.model, f, DerivativeMode::kAdjoint, w, q_ref, N, limits);
+    const VecX<double> plain = problem.torque_bounds().scale();
+    problem.cap_limit_rows(Tf);
+    const TorqueBounds& b = problem.torque_bounds();
+    VecX<double> C(n);
+    for (int j = 0; j < n; ++j) {
+      if (f == Formulation::kInverseDynamics) {
+        C[j] = w.Qa[j] + c[j];
+        for (int k = 0; k < n; ++k) C[j] += M(k, j) * M(k, j) * w.R[k];
+      } else {
+        const MatX<double> Minv = M.inverse();
+        C[j] = w.R[j];
+        for (int k = 0; k < n; ++k) C[j] += Minv(k, j) * Minv(k, j) * c[k];
+      }
+    }
+    EXPECT_LE((problem.input_block_diagonal(Tf) - C).cwiseAbs().maxCoeff(), 1e-10 * C.maxCoeff());
+    int capped = 0, above = 0;
+    for (int j = 0; j < n; ++j) {
+      above += w.R[j] > C[j];
+      const double Delta = limits.upper[j] - limits.lower[j];
+      EXPECT_DOUBLE_EQ(plain[j], w.R[j] / Delta) << "joint " << j;
+      EXPECT_NEAR(b.scale()[j], std::min(w.R[j], C[j]) / Delta, 1e-12 * plain[j]) << "joint " << j;
+      capped += b.scale()[j] < plain[j];
+    }
+    EXPECT_EQ(capped, above);
+    if (f == Formulation::kInverseDynamics) {
+      EXPECT_GE(capped, 1) << "R of the last joint lies above ID's block";
+    } else {
+      EXPECT_EQ(capped, 0) << "FD's block holds R itself";
+    }
+    VecX<double> d(n), rho(n), H_d(n), H_rho(n);
+    const VecX<double> inside = (VecX<double>(n) << 15, -7, 0.5, 1.9).finished();
+    b.consistent_dummy(inside, d, rho);
+    b.dummy_gradients(inside, d, rho, H_d, H_rho);
+    for (int j = 0; j < n; ++j) {
+      EXPECT_LE(std::abs(H_d[j]), 1e-14 * b.r_d()[j]) << "joint " << j;
+      EXPECT_LE(std::abs(H_rho[j]), 1e-12 * b.scale()[j] * b.half_range()[j] * b.half_range()[j]) << "joint " << j;
+    }
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(

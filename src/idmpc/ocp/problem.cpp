@@ -1,7 +1,9 @@
 #include "idmpc/ocp/problem.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
+#include "idmpc/dynamics/crba.hpp"
 #include "idmpc/ocp/actuated_input_stages.hpp"
 #include "idmpc/ocp/fd_stages.hpp"
 #include "idmpc/ocp/id_stages.hpp"
@@ -64,6 +66,28 @@ OcpProblem& OcpProblem::operator=(const OcpProblem& o) {
   if (this != &o) *this = OcpProblem(o);
   return *this;
 }
+
+VecX<double> OcpProblem::input_block_diagonal(double Tf) const {
+  if (!(Tf > 0) || !std::isfinite(Tf)) {
+    throw std::invalid_argument("the horizon T_f must be positive and finite, got " + std::to_string(Tf));
+  }
+  const Model& model = terms_.model();
+  const OcpWeights& w = weights();
+  const int n = model.n;
+  Data data(model, DataParts::rnea() | DataParts::crba());
+  const MatX<double> M = crba(model, data, cost().q_ref());
+  const double dtau = Tf / N_;
+  const VecX<double> c = dtau * (w.Qq * (Tf * Tf * Tf / 3) + w.Qv * Tf);
+  if (formulation_ == Formulation::kInverseDynamics) {
+    VecX<double> C = (M.transpose() * w.R.asDiagonal() * M).diagonal() + c;
+    if (w.Qa.size() == n) C += w.Qa;
+    return C;
+  }
+  const MatX<double> Minv = M.ldlt().solve(MatX<double>::Identity(n, n));
+  return w.R + Minv.cwiseAbs2().transpose() * c;
+}
+
+void OcpProblem::cap_limit_rows(double Tf) { terms_.bounds().cap_scale(input_block_diagonal(Tf)); }
 
 void OcpProblem::set_stages_in_lanes(bool on) {
   if (on == lanes_) return;

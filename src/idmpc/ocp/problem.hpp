@@ -79,6 +79,17 @@ class OcpProblem {
   const TorqueBounds& torque_bounds() const { return terms_.bounds(); }
   /// @brief Dummy weight r_d = f × its nominal value (TorqueBounds::set_dummy_weight_factor).
   void set_dummy_weight_factor(double f) { terms_.bounds().set_dummy_weight_factor(f); }
+  /// @brief The diagonal of the input's block of ∂F/∂U at the first stage, estimated at q_ref for a
+  /// horizon T_f (size n; FD: the actuated joints' entries): the stage's own torque cost in the input
+  /// plus the horizon's joint weights reached through it, with
+  /// c_k = Δτ·(Q_q,k T_f³/3 + Q_v,k T_f), the cost's curvature in a velocity step of joint k at
+  /// the start (Δτ = T_f/N): ID (input a)  C_j = (MᵀRM)_jj + Q_a,j + c_j;
+  /// FD (input u)  C_j = R_j + Σ_k (M⁻¹)_kj² c_k ≥ R_j.
+  VecX<double> input_block_diagonal(double Tf) const;
+  /// @brief Caps the torque limits' row scale at the input's block (TorqueBounds::cap_scale with
+  /// input_block_diagonal(T_f)): the same constraint, rows no larger than the input's. Binds only
+  /// in ID, on joints whose R exceeds (MᵀRM)_jj + Q_a + c_j (light joints); FD's C_j ≥ R_j.
+  void cap_limit_rows(double Tf);
   /// @brief m: bounded joints, each with a dummy input and a multiplier per stage.
   int m() const { return terms_.m(); }
   /// @brief The estimate d̂ of the joint torque the model misses (formulations.md §Disturbance observer: friction error,

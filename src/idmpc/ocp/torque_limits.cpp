@@ -56,6 +56,18 @@ TorqueBounds::TorqueBounds(const TorqueLimits& limits, const VecX<double>& R, in
   r_d_ = r_d_nominal_;
 }
 
+void TorqueBounds::cap_scale(const VecX<double>& C) {
+  for (int k = 0; k < m(); ++k) {
+    const int j = joint_[static_cast<size_t>(k)];
+    if (j >= C.size() || !(C[j] > 0) || !std::isfinite(C[j])) {
+      throw std::invalid_argument("torque limits: the row cap of joint " + std::to_string(j) +
+                                  " must be positive and finite, got " +
+                                  (j < C.size() ? std::to_string(C[j]) : std::string("none")));
+    }
+    scale_[k] = std::min(scale_[k], C[j] / (2 * half_range_[k]));
+  }
+}
+
 void TorqueBounds::consistent_dummy(In u, Out d, Out rho) const {
   for (int k = 0; k < m(); ++k) {
     const double e = u[joint_[static_cast<size_t>(k)]] - middle_[k], r = half_range_[k];

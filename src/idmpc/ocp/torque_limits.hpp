@@ -14,6 +14,15 @@
 /// C/GMRES's kmax = 10 GMRES nor the Newton start can solve the stage block (measured on the
 /// Panda: the initialization stalls at ‖F‖ ≈ 10, the closed loop diverges).
 ///
+/// Capped at the input's block: s_j = min(R_j, C_j)/Δ_j (cap_scale), C_j the diagonal of the
+/// input's block of ∂F/∂U (OcpProblem::cap_limit_rows). The constraint and the optimum are the
+/// same for any s > 0; s sets where the rows (d, ρ) sit in ∂F/∂U: at about ±s_jΔ_j. FD's block
+/// holds R_j and more (C_j ≥ R_j), so the cap never binds there. ID's acceleration block holds
+/// R_j only through M: its diagonal is (MᵀRM)_jj plus the horizon's weights, and on light joints,
+/// whose automatic R is large, R_j exceeds it by up to 1e3 — ten GMRES iterations did not resolve
+/// that spread, and ID's continuation diverged on 7 of 36 generated arms (reach), against 1
+/// with the cap (results.md#generated-arms-with-the-defaults).
+///
 /// Dummy weight: r_d,j = κ R_j Δ_j / 2 with κ = kDummyWeight. Eliminating d and ρ leaves the
 /// barrier −r_d·√((Δ/2)² − (u − ū)²) on the torque: its curvature mid-range is κR (κ of the
 /// torque weight), and at a holding torque u_ref ≠ ū it pulls the optimum off the target, by
@@ -57,12 +66,15 @@ class TorqueBounds {
   const std::vector<int>& joints() const { return joint_; }
   const VecX<double>& middle() const { return middle_; }          ///< ū, size m
   const VecX<double>& half_range() const { return half_range_; }  ///< Δ/2, size m
-  const VecX<double>& scale() const { return scale_; }            ///< s = R/Δ, size m
+  const VecX<double>& scale() const { return scale_; }            ///< s = R/Δ (or capped), size m
   const VecX<double>& r_d() const { return r_d_; }                ///< dummy weights, size m
 
   /// @brief r_d = f·κRΔ/2 (f ≥ 1 pushes the solution into the interior, as a barrier weight;
   /// the initialization continues f down to 1).
   void set_dummy_weight_factor(double f) { r_d_ = f * r_d_nominal_; }
+  /// @brief s_j = min(s_j, C_j/Δ_j) for the bounded joints j (C size n, positive where bounded;
+  /// else std::invalid_argument naming the joint): rows no larger than the input's own.
+  void cap_scale(const VecX<double>& C);
 
   /// @brief w_j += 2 s_k ρ_k (u_j − ū_k) for the bounded joints j = joints()[k] (u, w size n).
   /// For double or dual-number vectors (Eigen expressions).
