@@ -20,7 +20,7 @@
 /// holds R_j and more (C_j ≥ R_j), so the cap never binds there. ID's acceleration block holds
 /// R_j only through M: its diagonal is (MᵀRM)_jj plus the horizon's weights, and on light joints,
 /// whose automatic R is large, R_j exceeds it by up to 1e3 — ten GMRES iterations did not resolve
-/// that spread, and ID's continuation diverged on 7 of 36 generated arms (reach), against 1
+/// that spread, and ID's continuation diverged on 7 of 36 generated arms (reach), against 3
 /// with the cap (results.md#generated-arms-with-the-defaults).
 ///
 /// Dummy weight: r_d,j = κ R_j Δ_j / 2 with κ = kDummyWeight. Eliminating d and ρ leaves the
