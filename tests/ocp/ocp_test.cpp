@@ -280,7 +280,7 @@ TEST(OcpTorqueLimits, TheLimitsRowsAreCappedAtTheInputsBlock) {
   w.Qv.setConstant(10);
   w.R = (VecX<double>(n) << 1e-3, 1e-2, 30, 300).finished();  // the last one(s) above ID's block
   mj::Reference ref(p.m.get());
-  const MatX<double> M = ref.mass_matrix(q_ref);
+  const MatX<double> M = ref.mass_matrix(q_ref), Minv = M.inverse();
   const VecX<double> c = dtau * (w.Qq * (Tf * Tf * Tf / 3) + w.Qv * Tf);
   for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
     SCOPED_TRACE(to_string(f));
@@ -294,7 +294,6 @@ TEST(OcpTorqueLimits, TheLimitsRowsAreCappedAtTheInputsBlock) {
         C[j] = w.Qa[j] + c[j];
         for (int k = 0; k < n; ++k) C[j] += M(k, j) * M(k, j) * w.R[k];
       } else {
-        const MatX<double> Minv = M.inverse();
         C[j] = w.R[j];
         for (int k = 0; k < n; ++k) C[j] += Minv(k, j) * Minv(k, j) * c[k];
       }
