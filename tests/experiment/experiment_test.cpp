@@ -76,6 +76,37 @@ TEST(PaperTask, DivergenceHintsNameTheSolversOwnSettings) {
   EXPECT_EQ(riccati.find("--solver"), std::string::npos) << riccati;
 }
 
+// Where FD's single-shooting rollout is ill-conditioned (λT_f above kIllConditionedGrowth), the
+// hint names only what applies there, with the numbers of this model: ID, the Riccati solver, a
+// horizon of 4/λ at the same step (N = 4/(λΔτ) rounded), multiple shooting; not ζ, N or R, which
+// did not help. Below the threshold, or for ID or the Riccati solver, the usual hint.
+TEST(PaperTask, AnIllConditionedFdRolloutsHintNamesWhatAppliesThere) {
+  Task t = arm_defaults();  // FD below: T_f = 0.5 s, N = 25, Δτ = 20 ms
+  t.formulation = "fd";
+  const double lambda = 20;  // e^{λT_f} = e^10 ≈ 2.2e4
+  const std::string fd = divergence_hint(t, 0, lambda);
+  EXPECT_EQ(fd.rfind("try --formulation id", 0), 0u) << fd;
+  EXPECT_NE(fd.find("diverges at 20 1/s"), std::string::npos) << fd;
+  EXPECT_NE(fd.find("amplifies by 2.2e+04"), std::string::npos) << fd;
+  EXPECT_NE(fd.find("--solver riccati"), std::string::npos) << fd;
+  EXPECT_NE(fd.find("--Tf 0.2 --N 10 "), std::string::npos) << fd;  // 4/λ = 0.2 s at 20 ms
+  EXPECT_NE(fd.find("--shooting multiple"), std::string::npos) << fd;
+  for (const char* unhelpful : {"--zeta", "--N 25", "larger --N", "--R"}) {
+    EXPECT_EQ(fd.find(unhelpful), std::string::npos) << unhelpful << " in " << fd;
+  }
+  // just below e^4.5 over the horizon: the usual hint
+  const std::string below = divergence_hint(t, 0, 0.99 * kIllConditionedGrowth / t.Tf);
+  EXPECT_EQ(below.find("--formulation id"), std::string::npos) << below;
+  EXPECT_NE(below.find("--zeta"), std::string::npos) << below;
+  const std::string above = divergence_hint(t, 0, 1.01 * kIllConditionedGrowth / t.Tf);
+  EXPECT_EQ(above.rfind("try --formulation id", 0), 0u) << above;
+  t.formulation = "id";
+  EXPECT_EQ(divergence_hint(t, 0, lambda).find("--formulation id"), std::string::npos);
+  t.formulation = "fd";
+  t.solver = "riccati";
+  EXPECT_EQ(divergence_hint(t, 0, lambda).find("--formulation id"), std::string::npos);
+}
+
 TEST(TaskFile, FieldsOverrideTheBaseAndPathsAreRelativeToTheFile) {
   TempDir dir;
   const std::string path = dir.write("mine.json", R"({

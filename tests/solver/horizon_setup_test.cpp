@@ -11,7 +11,10 @@
 #include <utility>
 #include <vector>
 
+#include <Eigen/Eigenvalues>
+
 #include "idmpc/dynamics/dynamics.hpp"
+#include "idmpc/mujoco/reference.hpp"
 #include "idmpc/solver/horizon_setup.hpp"
 #include "support/problems.hpp"
 
@@ -149,6 +152,62 @@ TEST(HorizonSetup, ImplicitDampingStepsAreTheHorizonsAndThePlants) {
   EXPECT_THROW(setup_horizon(model, settings), std::invalid_argument);
   settings.solver = SolverKind::kRiccati;
   EXPECT_TRUE(setup_horizon(model, settings).implicit_damping);
+}
+
+// The open loop's rate λ (horizon_setup.hpp), recomputed from MuJoCo: the largest real part of
+// the eigenvalues of [[0, I], [−M⁻¹G, −M⁻¹D]] with M = mj_fullM and G, D central differences of
+// mj_inverse's torque at rest in q and in v, over q_start and q_ref: the paper's chain near upright
+// (gravity-unstable) and the tree, whose joint damping enters through D. FD under C/GMRES is told at start where λT_f > kIllConditionedGrowth; ID, the Riccati
+// solver and a shorter horizon are not.
+double mujoco_open_loop_rate(const test::Problem& p, const std::vector<VecX<double>>& qs) {
+  mj::Reference ref(p.m.get());
+  const int n = p.model.n;
+  const VecX<double> zero = VecX<double>::Zero(n);
+  const double h = 1e-6;
+  double rate = 0;
+  for (const VecX<double>& q : qs) {
+    MatX<double> G(n, n), D(n, n);
+    for (int j = 0; j < n; ++j) {
+      const VecX<double> e = VecX<double>::Unit(n, j) * h;
+      G.col(j) = (ref.inverse(q + e, zero, zero) - ref.inverse(q - e, zero, zero)) / (2 * h);
+      D.col(j) = (ref.inverse(q, e, zero) - ref.inverse(q, -e, zero)) / (2 * h);
+    }
+    const MatX<double> M = ref.mass_matrix(q);
+    MatX<double> A = MatX<double>::Zero(2 * n, 2 * n);
+    A.topRightCorner(n, n).setIdentity();
+    A.bottomLeftCorner(n, n) = -M.lu().solve(G);
+    A.bottomRightCorner(n, n) = -M.lu().solve(D);
+    rate = std::max(rate, Eigen::EigenSolver<MatX<double>>(A, false).eigenvalues().real().maxCoeff());
+  }
+  return rate;
+}
+
+TEST(HorizonSetup, OpenLoopRateIsTheFastestGrowthOfTheLinearizedArm) {
+  for (const std::string& path : {kArm4, kTree}) {
+    SCOPED_TRACE(path);
+    const test::Problem p = test::load_problem(path);
+    ControllerSettings settings = settings_of(p.model, 1.0, 50);
+    settings.formulation = Formulation::kForwardDynamics;
+    const HorizonSetup setup = setup_horizon(p.model, settings);
+    const double expected = mujoco_open_loop_rate(p, {settings.q_start, settings.q_ref});
+    ASSERT_GT(expected, 1.0) << "the case needs an unstable open loop";
+    EXPECT_NEAR(setup.open_loop_rate, expected, 1e-6 * expected);
+    // said at start for FD's C/GMRES exactly where e^{λT_f} exceeds e^kIllConditionedGrowth
+    auto said = [](const HorizonSetup& s) {
+      return std::any_of(s.notes.begin(), s.notes.end(),
+                         [](const std::string& note) { return note.find("the open loop diverges at") == 0; });
+    };
+    settings.cgmres.Tf = 1.01 * kIllConditionedGrowth / expected;
+    EXPECT_TRUE(said(setup_horizon(p.model, settings)));
+    settings.cgmres.Tf = 0.99 * kIllConditionedGrowth / expected;
+    EXPECT_FALSE(said(setup_horizon(p.model, settings)));
+    settings.cgmres.Tf = 1.01 * kIllConditionedGrowth / expected;
+    settings.formulation = Formulation::kInverseDynamics;
+    EXPECT_FALSE(said(setup_horizon(p.model, settings)));
+    settings.formulation = Formulation::kForwardDynamics;
+    settings.solver = SolverKind::kRiccati;
+    EXPECT_FALSE(said(setup_horizon(p.model, settings)));
+  }
 }
 
 // Settings the rules cannot use are refused, naming the setting; without friction loss given the

@@ -24,6 +24,14 @@ std::string text(double x) {
   return o.str();
 }
 
+// a measured quantity, to three digits
+std::string text3(double x) {
+  std::ostringstream o;
+  o.precision(3);
+  o << x;
+  return o.str();
+}
+
 // typed access naming file and field
 struct Reader {
   const json& j;
@@ -550,36 +558,49 @@ bool without_Qa(const Task& t) {
   return std::all_of(t.Qa.begin(), t.Qa.end(), [](double x) { return x == 0; });
 }
 
-std::string divergence_hint(const Task& t, double damping_step_ratio) {
+std::string divergence_hint(const Task& t, double damping_step_ratio, double open_loop_rate) {
   std::vector<std::string> tries;
-  if (damping_step_ratio > 1 && t.implicit_damping == "off") {
-    tries.push_back("--implicit-damping on (or auto; the joint damping makes the explicit horizon step unstable: "
-                    "dtau*max eig(M^-1 D) = " + text(damping_step_ratio) + " > 1)");
-  }
-  if (t.formulation == "id" && without_Qa(t)) {
-    const double Qa = t.Qa_fallback > 0 ? t.Qa_fallback : 1e-4;
-    tries.push_back("--Qa " + text(Qa) + " (a small weight on the accelerations, the paper's fallback" +
-                    std::string(t.Qa_fallback > 0 ? "; `swingup --fallback` reruns with it" : "") + ")");
-  }
   const bool riccati = t.solver == "riccati";
-  if (riccati) {
-    tries.push_back("--iterations " + std::to_string(std::max(3, 2 * t.riccati.iterations)) +
-                    " (more SQP iterations per update" +
-                    std::string(t.riccati.line_search ? ")" : ", with \"riccati\": {\"line_search\": true} in the task)"));
+  if (!riccati && t.formulation == "fd" && open_loop_rate * t.Tf > kIllConditionedGrowth) {
+    // FD's rollout across a fast unstable open loop: what helped on such arms (docs/results.md);
+    // kmax, zeta, N and exact products did not
+    const double dtau = t.Tf / t.N;
+    const int N = std::max(1, static_cast<int>(std::lround(4.0 / open_loop_rate / dtau)));
+    tries.push_back("--formulation id (the open loop diverges at " + text3(open_loop_rate) +
+                    " 1/s: FD's rollout amplifies by " + text3(std::exp(open_loop_rate * t.Tf)) +
+                    " over the horizon, ID's integrates accelerations)");
+    tries.push_back("--solver riccati (no single-shooting rollout to condition)");
+    tries.push_back("--Tf " + text(N * dtau) + " --N " + std::to_string(N) + " (a horizon of 4/lambda at the same step)");
+    if (t.shooting != "multiple") tries.push_back("--shooting multiple");
   } else {
-    if (t.alpha > 0 && !t.init_full_horizon) {
-      tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
-                      "growing the horizon from zero)");
+    if (damping_step_ratio > 1 && t.implicit_damping == "off") {
+      tries.push_back("--implicit-damping on (or auto; the joint damping makes the explicit horizon step unstable: "
+                      "dtau*max eig(M^-1 D) = " + text(damping_step_ratio) + " > 1)");
     }
-    tries.push_back("--solver riccati (Gauss-Newton SQP steps with a line search, no continuation to lose)");
+    if (t.formulation == "id" && without_Qa(t)) {
+      const double Qa = t.Qa_fallback > 0 ? t.Qa_fallback : 1e-4;
+      tries.push_back("--Qa " + text(Qa) + " (a small weight on the accelerations, the paper's fallback" +
+                      std::string(t.Qa_fallback > 0 ? "; `swingup --fallback` reruns with it" : "") + ")");
+    }
+    if (riccati) {
+      tries.push_back("--iterations " + std::to_string(std::max(3, 2 * t.riccati.iterations)) +
+                      " (more SQP iterations per update" +
+                      std::string(t.riccati.line_search ? ")" : ", with \"riccati\": {\"line_search\": true} in the task)"));
+    } else {
+      if (t.alpha > 0 && !t.init_full_horizon) {
+        tries.push_back("--alpha 0 --init-full-horizon true (start from the solved full-horizon problem instead of "
+                        "growing the horizon from zero)");
+      }
+      tries.push_back("--solver riccati (Gauss-Newton SQP steps with a line search, no continuation to lose)");
+    }
+    tries.push_back("a larger --R (now " + (t.R.empty() ? std::string("auto") : text(t.R.front())) +
+                    ") for smaller, smoother torques");
+    if (!riccati) {
+      const double zeta = t.zeta > 0 ? t.zeta : 1.0 / t.dt;
+      tries.push_back("a smaller --zeta (now " + text(zeta) + ")");
+    }
+    tries.push_back("a larger --N (now " + std::to_string(t.N) + ") for finer horizon steps");
   }
-  tries.push_back("a larger --R (now " + (t.R.empty() ? std::string("auto") : text(t.R.front())) +
-                  ") for smaller, smoother torques");
-  if (!riccati) {
-    const double zeta = t.zeta > 0 ? t.zeta : 1.0 / t.dt;
-    tries.push_back("a smaller --zeta (now " + text(zeta) + ")");
-  }
-  tries.push_back("a larger --N (now " + std::to_string(t.N) + ") for finer horizon steps");
   std::string s = "try ";
   for (size_t k = 0; k < tries.size(); ++k) s += (k ? "; or " : "") + tries[k];
   return s;

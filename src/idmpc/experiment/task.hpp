@@ -174,8 +174,10 @@ bool without_Qa(const Task& task);
 /// @brief What to try after a divergence of this task, as options to change: one line
 /// starting "try ", e.g. implicit damping when it was off and the explicit horizon step is
 /// unstable (damping_step_ratio = Δτ·max eig(M⁻¹D) > 1), a small Q_a for ID, the full-horizon
-/// start, a larger R, a smaller ζ.
-std::string divergence_hint(const Task& task, double damping_step_ratio = 0);
+/// start, a larger R, a smaller ζ. Where FD's C/GMRES rollout is ill-conditioned, open_loop_rate
+/// λ·T_f > kIllConditionedGrowth (horizon_setup.hpp), only what applies there: ID, the Riccati
+/// solver, a horizon of 4/λ at the same step, multiple shooting.
+std::string divergence_hint(const Task& task, double damping_step_ratio = 0, double open_loop_rate = 0);
 
 /// @brief One cell of the paper's Tables 1–3 (mjcf/paper_tables.json).
 struct PaperCell {

@@ -304,7 +304,7 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.saturated_steps = result.saturated_steps;
   s.saturated_any = result.saturated_any;
   s.max_constraint_violation = result.max_constraint_violation;
-  if (s.diverged) s.divergence_hint = divergence_hint(task_, chosen.damping_step_ratio);
+  if (s.diverged) s.divergence_hint = divergence_hint(task_, chosen.damping_step_ratio, chosen.open_loop_rate);
   s.model_hash = file_hash(task_.model);  // render checks a log's model and summary by these
   s.log_hash = file_hash(log_path);
   return s;

@@ -54,6 +54,25 @@ double damping_rate(const Model& model, const std::vector<VecX<double>>& qs) {
   return rate;
 }
 
+// the largest real part of the eigenvalues of the dynamics linearized at rest with the torques
+// held, [[0, I], [−M⁻¹∂τ/∂q, −M⁻¹∂τ/∂v]], over the configurations; 0 if none is positive
+double open_loop_rate(const Model& model, const std::vector<VecX<double>>& qs) {
+  const int n = model.n;
+  Data data(model, DataParts::rnea() | DataParts::rnea_derivatives());
+  const VecX<double> zero = VecX<double>::Zero(n);
+  MatX<double> A = MatX<double>::Zero(2 * n, 2 * n);
+  A.topRightCorner(n, n).setIdentity();
+  double rate = 0;
+  for (const VecX<double>& q : qs) {
+    rnea_derivatives(model, data, q, zero, zero);
+    const auto M = data.M.ldlt();
+    A.bottomLeftCorner(n, n) = -M.solve(data.dtau_dq);
+    A.bottomRightCorner(n, n) = -M.solve(data.dtau_dv);
+    rate = std::max(rate, Eigen::EigenSolver<MatX<double>>(A, false).eigenvalues().real().maxCoeff());
+  }
+  return rate;
+}
+
 // max over the configurations of (M(q)⁻¹)_jj: joint j's own acceleration per unit torque
 VecX<double> inverse_inertia_diagonal(const Model& model, const std::vector<VecX<double>>& qs) {
   Data data(model);
@@ -294,8 +313,16 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   auto plant_model = std::make_shared<const Model>(with_implicit_damping(with_friction, s.plant_step));
   OcpWeights weights = auto_weights(s, configurations, with_friction, stepped, dtau, lower, upper, notes);
   MatX<double> terminal = terminal_lqr(*horizon_model, s, weights, dtau, notes);
+  // the open loop of the horizon's dynamics (its damping as the plant has it, not the step's)
+  const double lambda = open_loop_rate(with_friction, configurations);
+  if (s.formulation == Formulation::kForwardDynamics && s.solver == SolverKind::kCgmres &&
+      lambda * s.cgmres.Tf > kIllConditionedGrowth) {
+    notes.push_back("the open loop diverges at " + text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) +
+                    " over Tf): FD's single-shooting rollout is ill-conditioned for C/GMRES here; ID's or the "
+                    "Riccati solver's is not");
+  }
   return HorizonSetup{std::move(plant_model), std::move(horizon_model), std::move(weights), implicit, ratio,
-                      std::move(eps), std::move(notes), std::move(terminal)};
+                      lambda, std::move(eps), std::move(notes), std::move(terminal)};
 }
 
 }  // namespace idmpc

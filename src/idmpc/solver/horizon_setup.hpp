@@ -22,6 +22,13 @@
 ///   q_ref twice over plus 20 rad/s² of the joint's own inertia), and the second term keeps the
 ///   regulator of joint j alone (effective inertia m_j = 1/(M⁻¹)_jj at its lightest) no faster
 ///   than ω = 0.35/Δτ (17.5 rad/s at the default Δτ = 20 ms), well inside what the step resolves.
+/// - The open loop's rate λ: the largest real part of the eigenvalues of the horizon model's
+///   dynamics linearized at rest (torques held) at q_start and q_ref,
+///   [[0, I], [−M⁻¹∂τ/∂q, −M⁻¹∂τ/∂v]] (gravity, springs, damping and the friction's slope), 0 where
+///   it is stable. FD's single-shooting rollout amplifies an early torque's effect by up to e^{λT_f}
+///   over the horizon; above e^{kIllConditionedGrowth} C/GMRES in FD is ill-conditioned there and
+///   mostly diverges on such arms, where ID's rollout (accelerations integrated) is not: said at
+///   start, and named in the divergence hint with what applies.
 /// - The plant model (torque rule, observer) takes the damping implicitly over one plant step, as
 ///   MuJoCo's Euler and implicit integrators do.
 /// - An under-actuated model's terminal cost is the LQR value ½eᵀP e of its fixed joint target
@@ -44,6 +51,11 @@
 
 namespace idmpc {
 
+/// @brief λT_f above which FD's single-shooting rollout is ill-conditioned for C/GMRES (an
+/// amplification e^4.5 ≈ 90 over the horizon): on generated arms, FD's C/GMRES diverged on 5 of the 7
+/// arms above it in each of two sets of 36, and on 1 and 2 of the 29 below it.
+inline constexpr double kIllConditionedGrowth = 4.5;
+
 /// @brief The smallest smoothing velocity of "auto" friction [rad/s or m/s].
 inline constexpr double kMinFrictionVelocity = 0.1;
 
@@ -56,6 +68,7 @@ struct HorizonSetup {
   OcpWeights weights;   ///< the settings', "auto" filled in (Q_a empty: zero)
   bool implicit_damping = false;
   double damping_step_ratio = 0;   ///< Δτ·max eig(M⁻¹D) over q_start and q_ref
+  double open_loop_rate = 0;       ///< λ [1/s]: the fastest growth of the open loop at q_start and q_ref (0: stable)
   VecX<double> friction_velocity;  ///< ε per joint (0 where there is no friction)
   std::vector<std::string> notes;  ///< what was chosen automatically, and why
   MatX<double> terminal_weight;    ///< under-actuated: the LQR value's P (2n × 2n), else empty
