@@ -196,7 +196,8 @@ def run_one(job):
         s = json.load(f)
     out = {"name": name, "formulation": formulation, "reached": s["reached"], "diverged": s["diverged"],
            "final": s["final_q_error"], "excess": s.get("max_constraint_violation", 0.0),
-           "p50_ms": s["p50_update_ms"], "notices": s.get("notices", [])}
+           "p50_ms": s["p50_update_ms"], "notices": s.get("notices", []),
+           "lambda": s.get("open_loop_rate", float("nan")), "Tf": s["task"]["cgmres"]["Tf"]}
     if kind == "circle":
         # the last half's RMS: the circle settled after the start and the default 1 s ramp
         out["final"] = float("nan") if s["diverged"] else last_half_rms(log)
@@ -280,14 +281,29 @@ def write_report(a, arms, results):
     by("damping:", lambda arm: "yes" if arm["damping"][0] > 0 else "no")
     by("armature:", lambda arm: "yes" if arm["armature"][0] > 0 else "no")
     by("gravcomp:", gravcomp_kind)
+
+    # the open loop's growth over the horizon, e^{λT_f}, from the runs' summaries (the same model for
+    # both formulations): above e^4.5 FD's single-shooting rollout is ill-conditioned for C/GMRES
+    def open_loop(nm):
+        r = results[(nm, "fd")]
+        if "lambda" not in r:
+            return "unknown"
+        return "λT_f > 4.5" if r["lambda"] * r["Tf"] > 4.5 else "λT_f ≤ 4.5"
+    groups = {}
+    for nm in names:
+        groups.setdefault(open_loop(nm), []).append(nm)
+    for g in sorted(groups):
+        lines.append("| open loop: %s | %s | %s |" % (g, rate([(n, "fd") for n in groups[g]]),
+                                                    rate([(n, "id") for n in groups[g]])))
     diverged = {f: sum(1 for n in names if results[(n, f)].get("diverged")) for f in ("fd", "id")}
     errors = {f: sum(1 for n in names if "error" in results[(n, f)]) for f in ("fd", "id")}
     excess = {f: sum(1 for n in names if results[(n, f)].get("excess", 0) > 1e-6) for f in ("fd", "id")}
     lines += ["", "Diverged: FD %d, ID %d. Refused (exit 1): FD %d, ID %d. Runs whose horizon torques left the "
               "actuator range at the start of some update (the plant's clamp held them): FD %d, ID %d." %
               (diverged["fd"], diverged["id"], errors["fd"], errors["id"], excess["fd"], excess["id"]), ""]
-    lines += ["## Runs that did not reach", "", "| arm | dof | actuators | scale [kg] | start | gravcomp | FD | ID |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += ["## Runs that did not reach", "",
+              "| arm | dof | actuators | scale [kg] | start | gravcomp | λ [1/s] | FD | ID |",
+              "|---|---|---|---|---|---|---|---|---|"]
 
     def outcome(r):
         if "error" in r:
@@ -302,9 +318,10 @@ def write_report(a, arms, results):
         fd, idr = results[(nm, "fd")], results[(nm, "id")]
         if fd.get("reached") and idr.get("reached"):
             continue
-        lines.append("| %s | %d | %s | %.3g | %s | %s | %s | %s |" %
+        lines.append("| %s | %d | %s | %.3g | %s | %s | %.3g | %s | %s |" %
                      (nm, arm["n"], arm["kind"].replace("_", " "), arm["scale"],
-                      "stretched" if arm["stretched"] else "random", gravcomp_kind(arm), outcome(fd), outcome(idr)))
+                      "stretched" if arm["stretched"] else "random", gravcomp_kind(arm),
+                      fd.get("lambda", float("nan")), outcome(fd), outcome(idr)))
     write_lines(a.out, lines)
 
 

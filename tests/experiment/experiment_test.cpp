@@ -231,6 +231,7 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
   s.saturated_steps = {3, 0, 1, 0};
   s.saturated_any = 4;
   s.max_constraint_violation = 0.25;
+  s.open_loop_rate = 12.5;
   s.model_hash = "fnv1a64:0123456789abcdef";
   s.log_hash = "fnv1a64:fedcba9876543210";
   const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");

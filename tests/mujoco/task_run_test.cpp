@@ -157,6 +157,8 @@ TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
   EXPECT_EQ(s.steps, r.steps);
   EXPECT_EQ(s.final_q_error, r.final_q_error);
   EXPECT_EQ(s.R.size(), 6u);
+  EXPECT_GT(run.horizon().open_loop_rate, 0.0) << "an arm under gravity";
+  EXPECT_EQ(s.open_loop_rate, run.horizon().open_loop_rate);
 
   task.qref = {0.1, 0.2};
   try {

@@ -358,6 +358,7 @@ nlohmann::json to_json(const RunSummary& s) {
   j["max_contact_force"] = s.max_contact_force;
   j["final_disturbance"] = s.final_disturbance;
   j["implicit_damping"] = s.implicit_damping;
+  j["open_loop_rate"] = s.open_loop_rate;
   j["friction_velocity"] = s.friction_velocity;
   j["weights"] = {{"Qq", s.Qq}, {"Qv", s.Qv}, {"R", s.R}};
   j["unbounded_joints"] = s.unbounded_joints;
@@ -447,7 +448,8 @@ constexpr SummaryField kSummaryFields[] = {
     {"latency.updates", Kind::kInteger, true}, {"latency.deadline_misses", Kind::kInteger, true},
     {"joint_error_rms", Kind::kNumber, false}, {"contact_steps", Kind::kInteger, false},
     {"max_contact_force", Kind::kNumber, false}, {"final_disturbance", Kind::kNumbers, false},
-    {"implicit_damping", Kind::kBool, false}, {"friction_velocity", Kind::kNumbers, false},
+    {"implicit_damping", Kind::kBool, false}, {"open_loop_rate", Kind::kNumber, false},
+    {"friction_velocity", Kind::kNumbers, false},
     {"weights.Qq", Kind::kNumbers, true}, {"weights.Qv", Kind::kNumbers, true}, {"weights.R", Kind::kNumbers, true},
     {"unbounded_joints", Kind::kStrings, false}, {"unmodeled", Kind::kStrings, true},
     {"notices", Kind::kStrings, false}, {"warnings", Kind::kStrings, true},
@@ -552,6 +554,7 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
     s.max_contact_force = j.value("max_contact_force", 0.0);
     s.final_disturbance = j.value("final_disturbance", std::vector<double>{});
     s.implicit_damping = j.value("implicit_damping", false);
+    s.open_loop_rate = j.value("open_loop_rate", 0.0);
     s.friction_velocity = j.value("friction_velocity", std::vector<double>{});
     if (j.contains("weights")) {
       s.Qq = j.at("weights").at("Qq").get<std::vector<double>>();

@@ -89,6 +89,7 @@ struct RunSummary {
   double max_contact_force = 0;    ///< the largest contact normal force [N]
   std::vector<double> final_disturbance;  ///< the observer's d̂ at the end (offset-free tracking)
   bool implicit_damping = false;   ///< whether the horizon integrated damping implicitly
+  double open_loop_rate = 0;       ///< λ [1/s]: the fastest growth of the open loop at q0 and q_ref (horizon_setup.hpp)
   std::vector<double> friction_velocity;  ///< ε of the horizon's smooth friction (0: none)
   std::vector<double> Qq, Qv, R;   ///< the weights as run ("auto" resolved)
   std::vector<std::string> unbounded_joints;  ///< joints without a declared torque limit

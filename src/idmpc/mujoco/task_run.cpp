@@ -290,6 +290,7 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
                              result.final_disturbance.data() + result.final_disturbance.size());
   const HorizonSetup& chosen = horizon();
   s.implicit_damping = chosen.implicit_damping;
+  s.open_loop_rate = chosen.open_loop_rate;
   s.friction_velocity.assign(chosen.friction_velocity.data(), chosen.friction_velocity.data() + n);
   s.Qq.assign(chosen.weights.Qq.data(), chosen.weights.Qq.data() + n);
   s.Qv.assign(chosen.weights.Qv.data(), chosen.weights.Qv.data() + n);
