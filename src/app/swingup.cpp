@@ -223,7 +223,15 @@ SwingupOutcome run_once(const Task& task, const std::string& log_path, const Run
     progress.emplace(run, task.duration, messages.progress_period);
     run.controller().set_interrupt_check([&progress] { progress->starting(); });
   }
+  bool first = true;
   auto on_step = [&](const mj::StepRecord& s) {
+    if (first) {
+      // the start's own residual, said as the loop begins (the first update starts from it)
+      first = false;
+      if (const std::string w = run.start_warning(run.controller().start_residual()); !w.empty()) {
+        std::cerr << "idmpc: warning: " << w << "\n";
+      }
+    }
     if (writer) writer->row(s.t, s.q, s.v, s.u, s.u_commanded, s.residual, s.update_ms, s.frame_position, s.frame_target);
     if (progress) progress->step(s);
   };

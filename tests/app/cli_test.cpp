@@ -584,7 +584,8 @@ TEST_F(Cli, SwingupWarnsAboutUnmodeledFeaturesRangesAndTheTimestep) {
   const std::vector<std::string> expected = {
       "does not model: range limits on joint(s) 'joint1'…'joint7' (7)", "q0 of joint 'joint4' of body 'link4' is 0, outside its range",
       "q0 of joint 'joint6' of body 'link6' is 5, outside its range", "qref of joint 'joint4' of body 'link4' is -4",
-      "timestep 0.001 s is replaced by the control period 0.0015 s"};
+      "the control period 0.0015 s is not a whole multiple of the model's timestep 0.001 s: the plant steps at "
+      "0.0015 s instead (coarser)"};
   const nlohmann::json s = nlohmann::json::parse(slurp(dir_ / "s.json"));
   for (const std::string& w : expected) {
     EXPECT_NE(r.err.find(w), std::string::npos) << w << " not in: " << r.err;

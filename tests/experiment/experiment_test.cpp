@@ -94,9 +94,11 @@ TEST(PaperTask, AnIllConditionedFdRolloutsHintNamesWhatAppliesThere) {
   for (const char* unhelpful : {"--zeta", "--N 25", "larger --N", "--R"}) {
     EXPECT_EQ(fd.find(unhelpful), std::string::npos) << unhelpful << " in " << fd;
   }
-  // just below e^4.5 over the horizon: the usual hint
+  // just below e^4.5 over the horizon: the usual hint, ID among its tries
   const std::string below = divergence_hint(t, 0, 0.99 * kIllConditionedGrowth / t.Tf);
-  EXPECT_EQ(below.find("--formulation id"), std::string::npos) << below;
+  EXPECT_EQ(below.rfind("try --solver riccati", 0), 0u) << below;
+  EXPECT_NE(below.find("--formulation id"), std::string::npos) << below;
+  EXPECT_EQ(below.find("diverges at"), std::string::npos) << below;
   EXPECT_NE(below.find("--zeta"), std::string::npos) << below;
   const std::string above = divergence_hint(t, 0, 1.01 * kIllConditionedGrowth / t.Tf);
   EXPECT_EQ(above.rfind("try --formulation id", 0), 0u) << above;

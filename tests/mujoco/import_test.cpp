@@ -5,6 +5,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -15,6 +16,7 @@
 #include <stdexcept>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "idmpc/dynamics/dynamics.hpp"
@@ -281,6 +283,46 @@ TEST_F(ImportTest, UnnamedServosAreReportedByTheirIndex) {
   EXPECT_NE(notice.find("position and velocity servos '#1', '#2' replaced"), std::string::npos) << notice;
   EXPECT_NE(notice.find("limited by the forcerange × gear of '#1', '#2'"), std::string::npos) << notice;
   EXPECT_EQ(notice.find("declare no forcerange"), std::string::npos) << notice;
+}
+
+// joints without an actuator that an active joint equality ties to an actuated one (mimic
+// joints, e.g. the second finger of a gripper): with servos they are driven by direct torques
+// within their leader's range, said on one line grouped by the joint each follows; with motors
+// the file is refused, naming them, with the option that drives them
+std::string mimic_mjcf(const std::string& kind) {
+  std::string bodies, equalities;
+  for (int j = 0; j < 5; ++j) {
+    bodies += "<body pos=\"0.2 0 0\"><joint name=\"j" + std::to_string(j) +
+              "\" axis=\"0 1 0\" range=\"-1 1\"/><geom type=\"capsule\" fromto=\"0 0 0 0.2 0 0\" size=\"0.02\" mass=\"0.3\"/>";
+  }
+  for (int j = 0; j < 5; ++j) bodies += "</body>";
+  for (const auto& [joint, leader] : {std::pair{"j1", "j0"}, {"j2", "j0"}, {"j4", "j3"}}) {
+    equalities += std::string("<joint joint1=\"") + joint + "\" joint2=\"" + leader + "\" polycoef=\"0 1 0 0 0\"/>";
+  }
+  const std::string attributes = kind == "position" ? R"(kp="20" forcelimited="true" forcerange="-3 3")"
+                                                    : R"(ctrllimited="true" ctrlrange="-3 3")";
+  return "<mujoco><option timestep=\"0.001\"/><default><geom contype=\"0\" conaffinity=\"0\"/></default><worldbody>" +
+         bodies + "</worldbody><equality>" + equalities + "</equality><actuator><" + kind + " joint=\"j0\" " +
+         attributes + "/><" + kind + " joint=\"j3\" " + attributes + "/></actuator></mujoco>";
+}
+
+TEST_F(ImportTest, MimicJointsAreSaidOnceGroupedByTheJointTheyFollow) {
+  const mj::ModelPtr servos = mj::load_model_from_string(mimic_mjcf("position"));
+  const mj::ImportedModel imported = mj::import_model(servos.get(), "mimic.xml");
+  using Pair = std::pair<std::string, std::string>;
+  EXPECT_EQ(imported.actuation.coupled_joints, (std::vector<Pair>{{"j1", "j0"}, {"j2", "j0"}, {"j4", "j3"}}));
+  const auto it = std::find_if(imported.notices.begin(), imported.notices.end(),
+                               [](const std::string& n) { return n.find("equality") != std::string::npos; });
+  ASSERT_NE(it, imported.notices.end()) << joined(imported.notices);
+  EXPECT_EQ(it->rfind("joint(s) 'j1', 'j2' follow 'j0'; 'j4' follows 'j3': no actuator of their own", 0), 0u) << *it;
+  EXPECT_EQ(std::count(it->begin(), it->end(), '('), std::count(it->begin(), it->end(), ')')) << *it;
+  // driven within their leader's range
+  EXPECT_EQ(imported.actuation.torque_upper[1], imported.actuation.torque_upper[0]);
+  EXPECT_EQ(imported.actuation.torque_lower[4], imported.actuation.torque_lower[3]);
+
+  const mj::ModelPtr motors = mj::load_model_from_string(mimic_mjcf("motor"));
+  expect_throw_naming<std::invalid_argument>([&] { mj::import_model(motors.get(), "mimic.xml"); },
+                                             {"mimic.xml", "'j1', 'j2' follow 'j0'; 'j4' follows 'j3'", "--direct-torque"});
 }
 
 // a servo without a forcerange but with a control range: the torque it gives at rest over its

@@ -3,6 +3,7 @@
 // plant and a controller exactly as `idmpc swingup` runs it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -159,6 +160,25 @@ TEST(TaskRun, SaysWhatItDidBeforeRunningAndRunsTheTask) {
   EXPECT_EQ(s.R.size(), 6u);
   EXPECT_GT(run.horizon().open_loop_rate, 0.0) << "an arm under gravity";
   EXPECT_EQ(s.open_loop_rate, run.horizon().open_loop_rate);
+
+  // the start was solved: no warning; the controller keeps its residual
+  EXPECT_EQ(run.controller().start_residual(), r.init_residual);
+  EXPECT_LE(r.init_residual, kStartSolved);
+  for (const std::string& w : s.warnings) EXPECT_EQ(w.find("the start was not solved"), std::string::npos) << w;
+  // a start left above kStartSolved is a warning of the run, said with its residual
+  EXPECT_EQ(run.start_warning(0.5 * kStartSolved), "");
+  EXPECT_EQ(run.start_warning(std::nan("")), "");
+  EXPECT_NE(run.start_warning(47.4).find("the start was not solved: |F| = 47.4"), std::string::npos);
+  mj::RunResult unsolved = r;
+  unsolved.init_residual = 47.4;
+  const std::vector<std::string> warned = run.summary(unsolved).warnings;
+  EXPECT_EQ(std::count_if(warned.begin(), warned.end(),
+                          [](const std::string& w) { return w.rfind("the start was not solved", 0) == 0; }),
+            1);
+  // the Riccati solver's start is its own (its residual is not C/GMRES's F)
+  Task riccati = task;
+  riccati.solver = "riccati";
+  EXPECT_EQ(mj::TaskRun(riccati).start_warning(47.4), "");
 
   task.qref = {0.1, 0.2};
   try {

@@ -592,6 +592,7 @@ std::string divergence_hint(const Task& t, double damping_step_ratio, double ope
                         "growing the horizon from zero)");
       }
       tries.push_back("--solver riccati (Gauss-Newton SQP steps with a line search, no continuation to lose)");
+      if (t.formulation == "fd") tries.push_back("--formulation id (its C/GMRES diverged on fewer of the generated arms)");
     }
     tries.push_back("a larger --R (now " + (t.R.empty() ? std::string("auto") : text(t.R.front())) +
                     ") for smaller, smoother torques");

@@ -178,6 +178,22 @@ std::string name_list(const std::vector<std::string>& names) {
   return out;
 }
 
+// mimic joints grouped by the actuated joint each follows: "joint(s) 'a', 'b' follow 'c'; 'd' follows 'e'"
+std::string coupled_list(const std::vector<std::pair<std::string, std::string>>& coupled) {
+  std::vector<std::pair<std::string, std::vector<std::string>>> by_leader;
+  for (const auto& [joint, leader] : coupled) {
+    auto it = std::find_if(by_leader.begin(), by_leader.end(), [&](const auto& g) { return g.first == leader; });
+    if (it == by_leader.end()) it = by_leader.insert(by_leader.end(), {leader, {}});
+    it->second.push_back(joint);
+  }
+  std::string out = "joint(s) ";
+  for (std::size_t k = 0; k < by_leader.size(); ++k) {
+    const auto& [leader, joints] = by_leader[k];
+    out += (k ? "; " : "") + name_list(joints) + (joints.size() > 1 ? " follow '" : " follows '") + leader + "'";
+  }
+  return out;
+}
+
 // the dofs some actuator drives: joint transmissions directly, the others (tendons, sites, …)
 // through their moment arms at qpos0
 std::vector<bool> actuated_dofs(const mjModel* m) {
@@ -241,8 +257,8 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
       // finger) moves with that actuator's effort: driven too, within the same range
       const int leader = coupled_actuated_dof(m, i, actuated);
       if (leader >= 0) {
-        act.coupled_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]) + "' (with '" +
-                                     object_name(m, mjOBJ_JOINT, m->dof_jntid[leader]));
+        act.coupled_joints.emplace_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]),
+                                        object_name(m, mjOBJ_JOINT, m->dof_jntid[leader]));
         coupled.emplace_back(i, leader);
       } else if (confirmed) {
         act.unactuated_joints.push_back(object_name(m, mjOBJ_JOINT, m->dof_jntid[i]));
@@ -370,8 +386,8 @@ Actuation import_actuation(const mjModel* m, const std::string& source, const Im
   // motors: a joint without one is passive (a mimic joint follows its leader's motor)
   bare_joints(actuated, false);
   if (!act.coupled_joints.empty()) {
-    throw std::invalid_argument("model '" + source + "': joint(s) '" + act.coupled_joints.front() +
-                                "') have no motor but a joint equality ties them to a motor's joint: use "
+    throw std::invalid_argument("model '" + source + "': " + coupled_list(act.coupled_joints) +
+                                ": no motor of their own, but a joint equality ties them to a motor's joint: use "
                                 "--direct-torque to drive them with direct torques");
   }
   act.direct = false;
@@ -419,12 +435,9 @@ std::vector<std::string> actuation_notices(const mjModel* m, const Actuation& ac
     out.push_back(line);
   }
   if (!act.coupled_joints.empty()) {
-    out.push_back("joint(s) '" + [&] {
-      std::string l;
-      for (const auto& c : act.coupled_joints) l += (l.empty() ? "" : "', '") + c;
-      return l;
-    }() + "') have no actuator but an active joint equality ties each to an actuated joint: driven by direct "
-          "torques too, within that joint's range");
+    out.push_back(coupled_list(act.coupled_joints) +
+                  ": no actuator of their own, but an active joint equality: driven by direct torques too, within "
+                  "that joint's range");
   }
   if (!act.unactuated_joints.empty()) {
     out.push_back("joint(s) " + name_list(act.unactuated_joints) +

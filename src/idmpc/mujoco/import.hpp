@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <mujoco/mujoco.h>
@@ -64,8 +65,8 @@ struct Actuation {
   std::vector<int> passive_dofs;
   bool passive(int dof) const { return std::binary_search(passive_dofs.begin(), passive_dofs.end(), dof); }
   /// Joints without an actuator that an active joint equality ties to an actuated joint (mimic
-  /// joints), driven by direct torques within that joint's range: "name' (with 'leader".
-  std::vector<std::string> coupled_joints;
+  /// joints), driven by direct torques within that joint's range: (name, the actuated joint's name).
+  std::vector<std::pair<std::string, std::string>> coupled_joints;
   /// @brief One line: what drives the joints and what bounds their torques.
   std::string summary() const;
 };

@@ -53,8 +53,8 @@ std::string Plant::set_control_period(double dt) {
     return "";
   }
   std::ostringstream o;
-  o << "the model's timestep " << m_->opt.timestep << " s is replaced by the control period " << dt
-    << " s (not a whole multiple of it)";
+  o << "the control period " << dt << " s is not a whole multiple of the model's timestep " << m_->opt.timestep
+    << " s: the plant steps at " << dt << " s instead (" << (dt < m_->opt.timestep ? "finer" : "coarser") << ")";
   m_->opt.timestep = dt;
   substeps_ = 1;
   return o.str();

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include <sstream>
 #include <utility>
 
 namespace idmpc::mj {
@@ -241,6 +242,19 @@ RunResult TaskRun::run(const ClosedLoopSettings& settings, const std::function<v
   return run_closed_loop(*plant_, *controller_, settings, on_step ? on_step : [](const StepRecord&) {});
 }
 
+std::string TaskRun::start_warning(double init_residual) const {
+  const ControllerSettings& c = resolved_.controller;
+  if (c.solver != SolverKind::kCgmres || !c.cgmres.init_full_horizon || c.cgmres.alpha != 0 ||
+      !(init_residual > kStartSolved)) {
+    return "";
+  }
+  std::ostringstream o;
+  o.precision(3);
+  o << "the start was not solved: |F| = " << init_residual << " after the full-horizon solve (solved: below "
+    << kStartSolved << "); C/GMRES tracks from there and may not recover";
+  return o.str();
+}
+
 RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path) const {
   const int n = this->n();
   const Controller& c = *controller_;
@@ -276,6 +290,7 @@ RunSummary TaskRun::summary(const RunResult& result, const std::string& log_path
   s.unmodeled = imported_.unmodeled;
   s.notices = notices_;
   s.warnings = warnings_;
+  if (const std::string w = start_warning(result.init_residual); !w.empty()) s.warnings.push_back(w);
   s.tracking = result.tracking;
   if (result.tracking) {
     // a frame target: the position error, over the run when it moves, else at the end

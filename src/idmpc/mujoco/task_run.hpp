@@ -85,6 +85,10 @@ class TaskRun {
   /// @brief The run's summary (the JSON of `swingup --summary`): the task, what was chosen,
   /// timings and outcome. `log_path`: the run's CSV log, hashed for `render` (empty: none).
   RunSummary summary(const RunResult& result, const std::string& log_path = "") const;
+  /// @brief The warning for a C/GMRES full-horizon start left unsolved, ‖F‖ = init_residual above
+  /// kStartSolved (empty otherwise, and for the Riccati solver, whose start is its own): said when
+  /// the loop starts and kept in the summary's warnings.
+  std::string start_warning(double init_residual) const;
 
  /// @brief The frame target of the task (none without "target") and its moving reference, or
   /// the moving joint reference (null: none).

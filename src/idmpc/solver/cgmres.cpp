@@ -39,11 +39,9 @@ constexpr double kInitMinimumHorizonStep = 1.0 / 64;
 // the full-horizon start first solves the problem by the Riccati solver (Gauss–Newton SQP with a
 // line search on the cost: a globalized method, where Newton on ‖F‖ stalls in a nonconvex
 // problem), at most this many iterations to this KKT residual, then polishes its inputs by
-// Newton–GMRES on F; the continuation below runs only if ‖F‖ stays above kInitAccept (a
-// C/GMRES loop runs at residuals of 1e-3–1: a start below 1e-4 is a good one)
+// Newton–GMRES on F; the continuation below runs only if ‖F‖ stays above kStartSolved
 constexpr int kInitRiccatiIterations = 200;
 constexpr double kInitRiccatiTolerance = 1e-9;
-constexpr double kInitAccept = 1e-4;
 
 std::string text(double x) {
   std::ostringstream o;
@@ -182,7 +180,7 @@ double Cgmres::initialize(double t, const Eigen::Ref<const VecX<double>>& q,
     // the Riccati solver's solution polished; else (or if better) the continuation from zero
     const VecX<double> zero_horizon = U_;
     norm = start_from_riccati(t, q, v, T);
-    if (!(norm <= kInitAccept)) {
+    if (!(norm <= kStartSolved)) {
       const VecX<double> riccati = U_;
       const double riccati_norm = norm;
       U_ = zero_horizon;

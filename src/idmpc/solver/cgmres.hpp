@@ -42,6 +42,11 @@ enum class Products { kDifference, kExact };
 std::string to_string(Products p);
 Products parse_products(const std::string& s);
 
+/// @brief ‖F‖ at or below which a full-horizon start counts as solved (Cgmres::initialize: above
+/// it the continuation from zero is tried too). A C/GMRES loop runs at residuals of 1e-3–1; a start
+/// above this one begins the loop away from the optimum it is meant to track.
+inline constexpr double kStartSolved = 1e-4;
+
 struct CgmresSettings {
   int kmax = 10;
   ShootingScheme shooting = ShootingScheme::kSingle;

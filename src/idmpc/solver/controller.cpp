@@ -198,8 +198,10 @@ const VecX<double>& Controller::initialize(In q, In v) {
   have_previous_ = false;
   d_hat_.setZero();
   problem().set_disturbance(d_hat_);
+  start_residual_ = std::numeric_limits<double>::quiet_NaN();
   try {
     solver_->initialize(0.0, q, v);
+    start_residual_ = solver_->residual_norm();
   } catch (const std::runtime_error& e) {
     // a non-finite start is a divergence at t = 0, reported like any other
     failure_ = e.what();

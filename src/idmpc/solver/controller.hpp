@@ -18,6 +18,7 @@
 /// above), and hands it to both formulations' horizon model (OcpProblem::set_disturbance).
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -141,6 +142,8 @@ class Controller {
   const Vec& applied_acceleration() const { return a0_hat_; }
   const std::string& failure() const { return failure_; }
   double residual_norm() const { return solver_->residual_norm(); }
+  /// @brief The solver's residual when the last initialize returned (NaN if it failed).
+  double start_residual() const { return start_residual_; }
   /// @brief The task's stage cost (StageTerms::stage_cost) of a measured state and the torque
   /// applied from it, at the references of the last update's time: what a closed loop
   /// integrates to compare controllers by their outcome.
@@ -175,6 +178,7 @@ class Controller {
   double observer_time_constant_ = 0;
   bool have_previous_ = false;
   Vec q_prev_, v_prev_, tau_last_, tau_pending_, d_hat_, a_meas_;
+  double start_residual_ = std::numeric_limits<double>::quiet_NaN();
   std::string failure_;
 };
 
