@@ -304,6 +304,30 @@ TEST(TaskRun, APlanarArmsCircleLiesInItsPlaneAndRunsCounterClockwiseOnCamera) {
   }
 }
 
+// a start as far out as the arm reaches (arm4 stretched, its Jacobian of lower rank there than
+// beside it): the circle lies on the side the arm can reach, the start its point farthest from the
+// base. Hanging down, the circle rises from the start (the default +z would put it out of reach
+// below); stretched upright, the rule and the default agree
+TEST(TaskRun, ACircleFromAStretchedStartLiesWithinReach) {
+  for (const double q_first : {M_PI, 0.0}) {
+    SCOPED_TRACE("q0[0] = " + std::to_string(q_first));
+    const mj::TaskRun run(task_in_mjcf(R"({"model": "arm4.xml", "q0": [)" + std::to_string(q_first) +
+                                       R"(, 0, 0, 0], "qref": 0, "duration": 0.01, "target": {"frame": "link3"},
+        "reference": {"shape": "circle", "radius": 0.1, "frequency": 0.5, "ramp": 0}})"));
+    const Vec3<double> base = run.controller().problem().model().link(0).X_tree.r;
+    VecX<double> p0(3), p(3), rate(3);
+    run.reference()->sample(0.0, p0, rate);
+    const double reach = (p0 - base).norm();
+    for (double t = 0.05; t < 2.0; t += 0.05) {
+      run.reference()->sample(t, p, rate);
+      EXPECT_LT((p - base).norm(), reach - 1e-6) << "t = " << t;
+    }
+    run.reference()->sample(1.0, p, rate);  // half a turn: the point opposite the start
+    EXPECT_NEAR((p - p0).norm(), 0.2, 1e-9);
+    EXPECT_NEAR(p[2] - p0[2], q_first == 0.0 ? -0.2 : 0.2, 1e-9);
+  }
+}
+
 // an arm of two joints (a yaw and a pitch) moves its tip on a sphere about the pitch axis' pivot:
 // its circle lies in the sphere's tangent plane at the start, the plane whose normal is the
 // radius to the tip (within 1e-9 of it at every time)

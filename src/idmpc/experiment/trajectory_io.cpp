@@ -110,7 +110,8 @@ std::string numbers(int n, const char* what) {
 constexpr double kDegenerate = 1e-9;
 
 std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start,
-                                   const std::optional<Vec3<double>>& plane_normal) {
+                                   const std::optional<Vec3<double>>& plane_normal,
+                                   const std::optional<Vec3<double>>& outward) {
   f.known({"shape", "radius", "frequency", "normal", "ramp", "center"}, "circle");
   if (start.size() != 3) {
     throw std::invalid_argument(f.where + ": field 'shape': \"circle\" needs a 3-D reference (a position), got dim " +
@@ -147,9 +148,14 @@ std::unique_ptr<Trajectory> circle(const Fields& f, const VecX<double>& start,
   const auto unit_in_plane = [&in_plane](const Vec3<double>& d) -> Vec3<double> {
     return in_plane(in_plane(d).normalized()).normalized();
   };
-  // e1 by default: world +z projected onto the plane (+y when the normal is along z)
-  const Vec3<double> e1_default = unit_in_plane(
-      in_plane(Vec3<double>::UnitZ()).norm() < kDegenerate ? Vec3<double>::UnitY() : Vec3<double>::UnitZ());
+  // e1 by default: world +z projected onto the plane (+y when the normal is along z); where the
+  // start is as far out as the arm reaches (`outward`, mostly in the plane), that direction: the
+  // circle then lies on the side the arm can reach
+  const bool out_in_plane = outward && in_plane(*outward).norm() > 0.5 * outward->norm();
+  const Vec3<double> e1_default =
+      out_in_plane ? unit_in_plane(*outward)
+                   : unit_in_plane(in_plane(Vec3<double>::UnitZ()).norm() < kDegenerate ? Vec3<double>::UnitY()
+                                                                                      : Vec3<double>::UnitZ());
   const Vec3<double> p0 = start;
   if (!f.j.contains("center")) return std::make_unique<CircleTrajectory>(p0 - r * e1_default, n, r, freq, e1_default, ramp);
   // a given centre: e1 towards the start projected onto the plane
@@ -308,15 +314,17 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim) {
 namespace {
 
 std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, const VecX<double>& start,
-                                     const std::string& base_dir, const std::optional<Vec3<double>>& plane_normal);
+                                     const std::string& base_dir, const std::optional<Vec3<double>>& plane_normal,
+                                     const std::optional<Vec3<double>>& outward);
 
 }  // namespace
 
 std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::string& where, const VecX<double>& start,
                                                  const std::string& base_dir,
-                                                 const std::optional<Vec3<double>>& plane_normal) {
+                                                 const std::optional<Vec3<double>>& plane_normal,
+                                                 const std::optional<Vec3<double>>& outward) {
   try {
-    return shape_of(j, where, start, base_dir, plane_normal);
+    return shape_of(j, where, start, base_dir, plane_normal, outward);
   } catch (const std::invalid_argument& e) {
     // the trajectories' own checks name neither the file nor the field: prefixed once
     const std::string what = e.what();
@@ -328,7 +336,8 @@ std::unique_ptr<Trajectory> trajectory_from_json(const json& j, const std::strin
 namespace {
 
 std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, const VecX<double>& start,
-                                     const std::string& base_dir, const std::optional<Vec3<double>>& plane_normal) {
+                                     const std::string& base_dir, const std::optional<Vec3<double>>& plane_normal,
+                                     const std::optional<Vec3<double>>& outward) {
   if (start.size() < 1) throw std::invalid_argument(where + ": the reference's start value is empty (dim 0)");
   if (!start.allFinite()) throw std::invalid_argument(where + ": the reference's start value is not finite");
   if (!j.is_object()) {
@@ -339,7 +348,7 @@ std::unique_ptr<Trajectory> shape_of(const json& j, const std::string& where, co
   const char* shapes = "\"circle\", \"line\", \"waypoints\" or \"csv\"";
   if (!j.contains("shape")) f.missing("shape", shapes);
   const json& shape = j.at("shape");
-  if (shape == "circle") return circle(f, start, plane_normal);
+  if (shape == "circle") return circle(f, start, plane_normal, outward);
   if (shape == "line") return line(f, start);
   if (shape == "waypoints") return waypoints(f, start);
   if (shape == "csv") return csv(f, start, base_dir);

@@ -30,9 +30,13 @@ SampledTrajectory read_trajectory_csv(const std::string& path, int dim);
 ///
 /// `plane_normal`, when given, is the normal of the only plane the reference can move in (a
 /// planar arm's end effector): a circle without `normal`, or with `"normal": "facing"`, lies in
-/// that plane.
+/// that plane. `outward`, when given, is the direction the reference cannot go at the start (an
+/// arm stretched out at a singular pose: from its base out through the start): a circle without
+/// `center` then has the start as its point farthest along it (where it lies mostly in the
+/// circle's plane), so that the circle lies on the side the arm can reach.
 std::unique_ptr<Trajectory> trajectory_from_json(const nlohmann::json& j, const std::string& where,
                                                  const VecX<double>& start, const std::string& base_dir,
-                                                 const std::optional<Vec3<double>>& plane_normal = std::nullopt);
+                                                 const std::optional<Vec3<double>>& plane_normal = std::nullopt,
+                                                 const std::optional<Vec3<double>>& outward = std::nullopt);
 
 }  // namespace idmpc

@@ -61,6 +61,23 @@ int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<doubl
   return rank;
 }
 
+// where the frame's start is as far out as the arm reaches — its position Jacobian at q of lower
+// rank than beside it (a stretched arm) — the direction from the base (the first joint's origin)
+// out through the frame's position p; none elsewhere
+std::optional<Vec3<double>> outward_at_singular_start(const Model& model, const Frame& frame, const VecX<double>& q,
+                                                      const Vec3<double>& p) {
+  const MatX<double> both = jacobians_at_and_beside(model, frame, q).topRows<3>();
+  int rank[2];
+  for (int k = 0; k < 2; ++k) {
+    Eigen::JacobiSVD<MatX<double>> svd(both.middleCols(k * model.n, model.n));
+    svd.setThreshold(1e-6);
+    rank[k] = static_cast<int>(svd.rank());
+  }
+  const Vec3<double> out = p - model.link(0).X_tree.r;
+  if (rank[0] >= rank[1] || !(out.norm() > 1e-9)) return std::nullopt;
+  return Vec3<double>(out.normalized());
+}
+
 // the direction the frame's position cannot move in, when its position Jacobian has rank 2: at q
 // and beside it (a planar arm: the normal of the plane it moves in), or else at q (an arm of two
 // joints, whose frame moves on a curved surface, or a start at a singular pose: the plane it moves
@@ -221,7 +238,10 @@ void TaskRun::set_up_references() {
   if (!task.reference.is_null()) {
     const std::optional<Vec3<double>> plane =
         frame_target_ ? motion_plane_normal(*model_, frame_target_->frame, resolved_.q0) : std::nullopt;
-    reference_ = trajectory_from_json(task.reference, where + ", 'reference'", start, base_dir, plane);
+    const std::optional<Vec3<double>> outward =
+        frame_target_ ? outward_at_singular_start(*model_, frame_target_->frame, resolved_.q0, frame_target_->position)
+                      : std::nullopt;
+    reference_ = trajectory_from_json(task.reference, where + ", 'reference'", start, base_dir, plane, outward);
     (task.target ? tracking_.position : tracking_.joints) = reference_;
   }
 }
