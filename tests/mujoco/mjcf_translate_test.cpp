@@ -155,7 +155,7 @@ TEST_F(MjcfTranslate, Fr3GetsMujoco3ServoGainsRangesAndForceLimits) {
   expect_one_notice(loaded, "actuator 'fr3_joint4' (<position> 'fr3_joint4', line 52): kv 200 (class 'fr3_wrist'");
   expect_one_notice(loaded, "inheritrange 0.8 gives ctrlrange [-1.46888, 1.46888]");
   expect_one_notice(loaded, "actuatorfrcrange [-87, 87] becomes forcerange [-43.5, 43.5] of actuator 'fr3_joint2'");
-  expect_one_notice(loaded, "actuatorfrcrange [-12, 12] becomes forcerange [-10, 10]");
+  expect_one_notice(loaded, "actuatorfrcrange [-12, 12] becomes forcerange [-10, 10] (its part within the actuator's own)");
   const std::string notice = loaded.notice();
   EXPECT_NE(notice.find("fr3_translate.xml' is written for a newer MuJoCo"), std::string::npos) << notice;
   EXPECT_NE(notice.find(": 12 changes (autolimits, implicitfast as implicit, keyframe blanks, inheritrange ×3, kv ×3, "

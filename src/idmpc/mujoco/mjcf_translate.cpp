@@ -868,7 +868,9 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
     }
     double lo = std::min(p.lower / gear, p.upper / gear), hi = std::max(p.lower / gear, p.upper / gear);
     mjtNum* fr = m->actuator_forcerange + 2 * u;
+    bool within_own = false;  // narrowed by the actuator's own forcerange
     if (m->actuator_forcelimited[u]) {
+      within_own = fr[0] > lo || fr[1] < hi;
       lo = std::max(lo, fr[0]);
       hi = std::min(hi, fr[1]);
     }
@@ -882,7 +884,8 @@ JointForceRanges apply_translation(mjModel* m, const MjcfTranslation& t, std::ve
     fr[1] = hi;
     m->actuator_forcelimited[u] = 1;
     notices.push_back({"actuatorfrcrange", label + ": actuatorfrcrange " + range_text(p.lower, p.upper) +
-                                               " becomes forcerange " + range_text(lo, hi) + " of " +
+                                               " becomes forcerange " + range_text(lo, hi) +
+                                               (within_own ? " (its part within the actuator's own)" : "") + " of " +
                                                actuator_label(m, u) + ", its only actuator (gear " + number(gear) + ")"});
   }
   return ranges;
