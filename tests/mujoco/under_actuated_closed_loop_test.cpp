@@ -102,6 +102,21 @@ TEST_P(UnderActuatedLoop, CartpoleSwingsUpAndBalances) {
   EXPECT_LE((res.final_q - run.settings().q_ref).cwiseAbs().maxCoeff(), task.reach_tolerance);
 }
 
+// acceptance tier: ID's passive-torque rows at the input's block (OcpProblem::scale_passive_rows)
+// let ID swing the cart-pole up at the paper's kmax = 10, where with s_E = mean R its continuation
+// diverged (at 2.1 s from this start, and from all 20 starts of docs/reference/underactuated.md)
+TEST(UnderActuatedPassiveRows, IdsCartpoleSwingsUpAndBalancesAtThePapersKmax) {
+  Task task = cartpole_task(Formulation::kInverseDynamics);
+  task.kmax = 10;
+  mj::TaskRun run(task);
+  ASSERT_EQ(run.settings().cgmres.kmax, 10);
+  mj::ClosedLoopSettings ls = run.loop_settings();
+  ls.phase_timing = false;
+  const mj::RunResult res = run.run(ls);
+  ASSERT_FALSE(res.diverged) << res.divergence_reason << " at " << res.diverged_at;
+  EXPECT_LE((res.final_q - run.settings().q_ref).cwiseAbs().maxCoeff(), task.reach_tolerance);
+}
+
 // The Riccati solver's swing-up tasks: the passive joint gets nothing (the first 0.3 s) ...
 using RiccatiCase = std::tuple<std::string, Formulation>;
 class RiccatiUnderActuatedLoop : public ::testing::TestWithParam<RiccatiCase> {};

@@ -23,6 +23,7 @@
 #include "idmpc/dynamics/finite_difference.hpp"
 #include "idmpc/mujoco/import.hpp"
 #include "idmpc/mujoco/load.hpp"
+#include "idmpc/mujoco/reference.hpp"
 #include "idmpc/solver/riccati.hpp"
 #include "idmpc/solver/shooting.hpp"
 #include "support/errors.hpp"
@@ -348,6 +349,57 @@ TEST_P(RiccatiUnderActuation, IdStepSolvesTheEqualityConstrainedQp) {
 
 INSTANTIATE_TEST_SUITE_P(Models, RiccatiUnderActuation,
                          ::testing::Values("acrobot", "pendubot", "cartpole", "passive_middle"));
+
+// ID's passive-torque rows at the input's block (OcpProblem::scale_passive_rows): s_E = mean over
+// the passive joints of C_E/M_EE, C the input block's diagonal (MᵀRM)_jj + Q_a,j + c_j with
+// c = Δτ(Q_q T_f³/3 + Q_v T_f), here recomputed from MuJoCo's mass matrix at q_ref; FD has no such
+// rows. The constraint is the same: its rows of F are s_E·u_E of the stage torques.
+TEST(UnderActuationModel, PassiveTorqueRowsAreScaledAtTheInputsBlock) {
+  for (const char* name : {"cartpole", "pendubot", "acrobot"}) {
+    SCOPED_TRACE(name);
+    const Problem p = load_problem(std::string(IDMPC_SOURCE_DIR "/mjcf/") + name + ".xml");
+    const Model& model = p.model;
+    const int n = model.n, N = 10;
+    const double Tf = 0.6, dtau = Tf / N;
+    const OcpWeights w{VecX<double>::LinSpaced(n, 3.0, 10.0), VecX<double>::Constant(n, 0.1),
+                       VecX<double>::Constant(n, 1e-3), VecX<double>::LinSpaced(n, 1e-3, 4e-3)};
+    const VecX<double> q_ref = VecX<double>::LinSpaced(n, 0.1, -0.2);
+    Shooting ocp(model, Formulation::kInverseDynamics, DerivativeMode::kAdjoint, w, q_ref, N);
+    OcpProblem& problem = ocp.problem();
+    double mean_R = 0;
+    for (int j : model.actuated_joints) mean_R += w.R[j] / model.n_actuated();
+    EXPECT_DOUBLE_EQ(problem.terms().passive_scale(), mean_R);
+    problem.scale_passive_rows(Tf);
+    mj::Reference ref(p.m.get());
+    const MatX<double> M = ref.mass_matrix(q_ref);
+    double expected = 0;
+    for (int j : model.unactuated_joints) {
+      double C = w.Qa[j] + dtau * (w.Qq[j] * Tf * Tf * Tf / 3 + w.Qv[j] * Tf);
+      for (int k = 0; k < n; ++k) C += M(k, j) * M(k, j) * w.R[k];
+      expected += C / M(j, j) / static_cast<double>(model.unactuated_joints.size());
+    }
+    EXPECT_NEAR(problem.terms().passive_scale(), expected, 1e-10 * expected);
+    EXPECT_GT(std::abs(expected / mean_R - 1), 0.3) << "the case must move s_E";
+    // the ν rows of F: s_E times the passive joints' torques
+    const int sd = problem.stage_dim(), ne = problem.equality_dim();
+    std::mt19937 rng(5);
+    const VecX<double> U = random_vector(rng, N * sd, 1.0);
+    VecX<double> F(N * sd);
+    ocp.residual(U, VecX<double>::Zero(n), VecX<double>::Zero(n), Tf, F);
+    for (int i = 0; i < N; ++i) {
+      for (int k = 0; k < ne; ++k) {
+        const int j = model.unactuated_joints[static_cast<std::size_t>(k)];
+        const double F_nu = F[i * sd + sd - ne + k];
+        EXPECT_NEAR(F_nu, expected * ocp.torques()(j, i), 1e-9 * std::max(1.0, std::abs(F_nu)));
+      }
+    }
+    // FD: nothing to scale
+    OcpProblem fd(model, Formulation::kForwardDynamics, DerivativeMode::kAdjoint, w, q_ref, N);
+    const double before = fd.terms().passive_scale();
+    fd.scale_passive_rows(Tf);
+    EXPECT_EQ(fd.terms().passive_scale(), before);
+  }
+}
 
 TEST(UnderActuationModel, ImportMarksThePassiveJointsAndThePlantLeavesThemAlone) {
   const Problem p = passive_middle();

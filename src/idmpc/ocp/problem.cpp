@@ -89,6 +89,17 @@ VecX<double> OcpProblem::input_block_diagonal(double Tf) const {
 
 void OcpProblem::cap_limit_rows(double Tf) { terms_.bounds().cap_scale(input_block_diagonal(Tf)); }
 
+void OcpProblem::scale_passive_rows(double Tf) {
+  if (terms_.n_e() == 0) return;
+  const Model& model = terms_.model();
+  const VecX<double> C = input_block_diagonal(Tf);
+  Data data(model, DataParts::rnea() | DataParts::crba());
+  const MatX<double> M = crba(model, data, cost().q_ref());
+  double sum = 0;
+  for (int j : model.unactuated_joints) sum += C[j] / M(j, j);
+  terms_.set_passive_scale(sum / static_cast<double>(model.unactuated_joints.size()));
+}
+
 void OcpProblem::set_stages_in_lanes(bool on) {
   if (on == lanes_) return;
   lanes_ = on;

@@ -90,6 +90,12 @@ class OcpProblem {
   /// input_block_diagonal(T_f)): the same constraint, rows no larger than the input's. Binds only
   /// in ID, on joints whose R exceeds (MᵀRM)_jj + Q_a + c_j (light joints); FD's C_j ≥ R_j.
   void cap_limit_rows(double Tf);
+  /// @brief ID on an under-actuated model: the passive torques' equality rows (s_E, stage_terms.hpp)
+  /// at the input's block, s_E = mean over the passive joints E of C_E / M_EE with C =
+  /// input_block_diagonal(T_f) and M at q_ref: the row's entry s_E·M_EE on the joint's own
+  /// acceleration is then the block's diagonal there. The same constraint and optimum; only the
+  /// conditioning GMRES sees changes. Nothing without passive-torque constraints (FD, fully actuated).
+  void scale_passive_rows(double Tf);
   /// @brief m: bounded joints, each with a dummy input and a multiplier per stage.
   int m() const { return terms_.m(); }
   /// @brief The estimate d̂ of the joint torque the model misses (formulations.md §Disturbance observer: friction error,

@@ -76,6 +76,13 @@ StageTerms::StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, c
   update_joint_references();
 }
 
+void StageTerms::set_passive_scale(double s) {
+  if (!(s > 0) || !std::isfinite(s)) {
+    throw std::invalid_argument("the passive torques' row scale must be positive and finite, got " + std::to_string(s));
+  }
+  passive_scale_ = s;
+}
+
 StageTerms::StageTerms(const StageTerms& o)
     : model_(o.model_),
       cost_(o.cost_),

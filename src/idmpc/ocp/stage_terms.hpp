@@ -50,7 +50,7 @@ class StageTerms {
   /// stage has the equality constraint s_E u_E = 0 on their torques u_E, with a multiplier ν
   /// per passive joint after ρ (formulations.md §Under-actuation): H gains s_E νᵀu_E, so
   /// w = ∂H/∂u gains s_E ν on those rows and ∂H/∂ν = s_E u_E. s_E is the mean R of the
-  /// actuated joints (1 if that is 0): the constraint in the units of the torque gradient.
+  /// actuated joints (1 if that is 0), until set_passive_scale.
   StageTerms(std::shared_ptr<const Model> model, QuadraticCost cost, const TorqueLimits& limits, int N,
              bool frame_jacobian_matrix, bool passive_constraints = false);
   StageTerms(const StageTerms& o);
@@ -86,6 +86,9 @@ class StageTerms {
   /// passive_constraints or passive joints); their multipliers ν follow ρ (size m + n_e).
   int n_e() const { return passive_constraints_ ? model_->n - model_->n_actuated() : 0; }
   double passive_scale() const { return passive_scale_; }
+  /// @brief s_E (positive and finite, else std::invalid_argument): the same constraint, its rows
+  /// scaled (OcpProblem::scale_passive_rows).
+  void set_passive_scale(double s);
   const QuadraticCost& cost() const { return cost_; }
   const TorqueBounds& bounds() const { return bounds_; }
   TorqueBounds& bounds() { return bounds_; }

@@ -25,6 +25,7 @@ OcpProblem make_problem(const HorizonSetup& setup, const ControllerSettings& s) 
   }
   OcpProblem problem(setup.horizon_model, s.formulation, s.derivatives, std::move(w), s.q_ref, s.N, limits);
   problem.cap_limit_rows(s.cgmres.Tf);  // the limits' rows no larger than the input's (torque_limits.hpp)
+  problem.scale_passive_rows(s.cgmres.Tf);  // ID's passive-torque rows at the input's (under-actuated)
   problem.set_frame_target(s.frame_target);
   problem.set_terminal_weight(setup.terminal_weight);
   if (s.frame_reference) problem.set_frame_trajectory(s.frame_reference);
