@@ -181,10 +181,11 @@ std::string name_list(const std::vector<std::string>& names) {
 // mimic joints grouped by the actuated joint each follows: "joint(s) 'a', 'b' follow 'c'; 'd' follows 'e'"
 std::string coupled_list(const std::vector<std::pair<std::string, std::string>>& coupled) {
   std::vector<std::pair<std::string, std::vector<std::string>>> by_leader;
-  for (const auto& [joint, leader] : coupled) {
-    auto it = std::find_if(by_leader.begin(), by_leader.end(), [&](const auto& g) { return g.first == leader; });
+  for (const auto& c : coupled) {
+    const std::string& leader = c.second;  // (a structured binding cannot be captured in C++17)
+    auto it = std::find_if(by_leader.begin(), by_leader.end(), [&leader](const auto& g) { return g.first == leader; });
     if (it == by_leader.end()) it = by_leader.insert(by_leader.end(), {leader, {}});
-    it->second.push_back(joint);
+    it->second.push_back(c.first);
   }
   std::string out = "joint(s) ";
   for (std::size_t k = 0; k < by_leader.size(); ++k) {
