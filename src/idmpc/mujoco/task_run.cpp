@@ -49,16 +49,21 @@ MatX<double> jacobians_at_and_beside(const Model& model, const Frame& frame, con
   return both;
 }
 
+// the ranks of Jacobians side by side (jacobians_at_and_beside's columns): at q, and beside it
+std::pair<int, int> ranks_at_and_beside(const MatX<double>& both, int n) {
+  int rank[2];
+  for (int k = 0; k < 2; ++k) {
+    Eigen::JacobiSVD<MatX<double>> svd(both.middleCols(k * n, n));
+    svd.setThreshold(1e-6);
+    rank[k] = static_cast<int>(svd.rank());
+  }
+  return {rank[0], rank[1]};
+}
+
 // the rank of a frame's Jacobian, the higher at q and beside it
 int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<double>& q) {
-  const MatX<double> J = jacobians_at_and_beside(model, frame, q);
-  int rank = 0;
-  for (int k = 0; k < 2; ++k) {
-    Eigen::JacobiSVD<MatX<double>> svd(J.middleCols(k * model.n, model.n));
-    svd.setThreshold(1e-6);
-    rank = std::max(rank, static_cast<int>(svd.rank()));
-  }
-  return rank;
+  const auto [at, beside] = ranks_at_and_beside(jacobians_at_and_beside(model, frame, q), model.n);
+  return std::max(at, beside);
 }
 
 // where the frame's start is as far out as the arm reaches — its position Jacobian at q of lower
@@ -66,15 +71,10 @@ int frame_jacobian_rank(const Model& model, const Frame& frame, const VecX<doubl
 // out through the frame's position p; none elsewhere
 std::optional<Vec3<double>> outward_at_singular_start(const Model& model, const Frame& frame, const VecX<double>& q,
                                                       const Vec3<double>& p) {
-  const MatX<double> both = jacobians_at_and_beside(model, frame, q).topRows<3>();
-  int rank[2];
-  for (int k = 0; k < 2; ++k) {
-    Eigen::JacobiSVD<MatX<double>> svd(both.middleCols(k * model.n, model.n));
-    svd.setThreshold(1e-6);
-    rank[k] = static_cast<int>(svd.rank());
-  }
+  const auto [at, beside] =
+      ranks_at_and_beside(jacobians_at_and_beside(model, frame, q).topRows<3>(), model.n);
   const Vec3<double> out = p - model.link(0).X_tree.r;
-  if (rank[0] >= rank[1] || !(out.norm() > 1e-9)) return std::nullopt;
+  if (at >= beside || !(out.norm() > 1e-9)) return std::nullopt;
   return Vec3<double>(out.normalized());
 }
 
@@ -264,8 +264,8 @@ RunResult TaskRun::run(const ClosedLoopSettings& settings, const std::function<v
 
 std::string TaskRun::start_warning(double init_residual) const {
   const ControllerSettings& c = resolved_.controller;
-  if (c.solver != SolverKind::kCgmres || !c.cgmres.init_full_horizon || c.cgmres.alpha != 0 ||
-      !(init_residual > kStartSolved)) {
+  // (a full-horizon start needs alpha 0: CgmresSettings::validate)
+  if (c.solver != SolverKind::kCgmres || !c.cgmres.init_full_horizon || !(init_residual > kStartSolved)) {
     return "";
   }
   std::ostringstream o;
