@@ -3,7 +3,7 @@
 target reaches, under FD and ID, on arms nobody tuned anything for.
 
 Usage: arm_population.py [--arms K] [--seed S] [--idmpc BUILD/src/idmpc] [--jobs J]
-                         [--solver cgmres|riccati] [--task reach|circle]
+                         [--solver auto|cgmres|riccati] [--task reach|circle]
                          [--out docs/reference/arm_population.md] [--keep DIR]
 
 Each arm is a fixed-base serial chain written here as MJCF, drawn at random (seeded):
@@ -197,7 +197,8 @@ def run_one(job):
     out = {"name": name, "formulation": formulation, "reached": s["reached"], "diverged": s["diverged"],
            "final": s["final_q_error"], "excess": s.get("max_constraint_violation", 0.0),
            "p50_ms": s["p50_update_ms"], "notices": s.get("notices", []),
-           "lambda": s.get("open_loop_rate", float("nan")), "Tf": s["task"]["cgmres"]["Tf"]}
+           "lambda": s.get("open_loop_rate", float("nan")), "Tf": s["task"]["cgmres"]["Tf"],
+           "solver": s.get("solver", solver)}
     if kind == "circle":
         # the last half's RMS: the circle settled after the start and the default 1 s ramp
         out["final"] = float("nan") if s["diverged"] else last_half_rms(log)
@@ -210,7 +211,7 @@ def main():
     ap.add_argument("--arms", type=int, default=60)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--solver", choices=["cgmres", "riccati"], default="cgmres")
+    ap.add_argument("--solver", choices=["auto", "cgmres", "riccati"], default="auto")
     ap.add_argument("--task", choices=["reach", "circle"], default="reach")
     ap.add_argument("--idmpc", default=os.path.join(ROOT, "build", "src", "idmpc"))
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "reference", "arm_population.md"))
@@ -301,9 +302,13 @@ def write_report(a, arms, results):
     lines += ["", "Diverged: FD %d, ID %d. Refused (exit 1): FD %d, ID %d. Runs whose horizon torques left the "
               "actuator range at the start of some update (the plant's clamp held them): FD %d, ID %d." %
               (diverged["fd"], diverged["id"], errors["fd"], errors["id"], excess["fd"], excess["id"]), ""]
+    if a.solver == "auto":
+        chosen = {f: sorted(n for n in names if results[(n, f)].get("solver") == "riccati") for f in ("fd", "id")}
+        lines += ["Solver \"auto\" chose the Riccati recursion for %d arms (the same in both formulations: %s), "
+                  "C/GMRES for the others." % (len(chosen["fd"]), "yes" if chosen["fd"] == chosen["id"] else "NO"), ""]
     lines += ["## Runs that did not reach", "",
-              "| arm | dof | actuators | scale [kg] | start | gravcomp | λ [1/s] | FD | ID |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "| arm | dof | actuators | scale [kg] | start | gravcomp | λ [1/s] | solver | FD | ID |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
 
     def outcome(r):
         if "error" in r:
@@ -318,10 +323,10 @@ def write_report(a, arms, results):
         fd, idr = results[(nm, "fd")], results[(nm, "id")]
         if fd.get("reached") and idr.get("reached"):
             continue
-        lines.append("| %s | %d | %s | %.3g | %s | %s | %.3g | %s | %s |" %
+        lines.append("| %s | %d | %s | %.3g | %s | %s | %.3g | %s | %s | %s |" %
                      (nm, arm["n"], arm["kind"].replace("_", " "), arm["scale"],
                       "stretched" if arm["stretched"] else "random", gravcomp_kind(arm),
-                      fd.get("lambda", float("nan")), outcome(fd), outcome(idr)))
+                      fd.get("lambda", float("nan")), fd.get("solver", a.solver), outcome(fd), outcome(idr)))
     write_lines(a.out, lines)
 
 

@@ -182,7 +182,9 @@ void bind_control(py::module_& m) {
       .def_readwrite("N", &ControllerSettings::N, "horizon stages")
       .def_property(
           "solver", [](const ControllerSettings& s) { return to_string(s.solver); },
-          [](ControllerSettings& s, const std::string& x) { s.solver = parse_solver(x); }, "\"cgmres\" or \"riccati\"")
+          [](ControllerSettings& s, const std::string& x) { s.solver = parse_solver(x); },
+          "\"cgmres\" (the default), \"riccati\" or \"auto\" (the Riccati recursion where FD's C/GMRES rollout is "
+          "ill-conditioned; Controller.solver says which)")
       .def_readwrite("cgmres", &ControllerSettings::cgmres)
       .def_readwrite("riccati", &ControllerSettings::riccati)
       .def_readwrite("weights", &ControllerSettings::weights)
@@ -232,6 +234,9 @@ void bind_control(py::module_& m) {
            py::arg("model"), py::arg("settings"))
       .def_property_readonly("n", &Controller::n)
       .def_property_readonly("dt", &Controller::dt)
+      .def_property_readonly(
+          "solver", [](const Controller& c) { return to_string(c.solver_kind()); },
+          "the solver it runs, \"cgmres\" or \"riccati\" (settings' \"auto\" resolved)")
       .def(
           "initialize",
           [](Controller& c, const Vector& q, const Vector& v) -> Vector {

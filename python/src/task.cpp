@@ -106,7 +106,7 @@ void bind_task(py::module_& m) {
       .def_readwrite("init_full_horizon", &Task::init_full_horizon)
       .def_readwrite("shooting", &Task::shooting, "\"single\" or \"multiple\"")
       .def_readwrite("products", &Task::products, "\"difference\" or \"exact\"")
-      .def_readwrite("solver", &Task::solver, "\"cgmres\" or \"riccati\"")
+      .def_readwrite("solver", &Task::solver, "\"auto\" (the default), \"cgmres\" or \"riccati\"; a TaskRun's task holds the one chosen")
       .def_readwrite("riccati", &Task::riccati, "the Riccati solver's settings")
       .def_readwrite("latency", &Task::latency,
                      "compute latency in the closed loop: \"none\", \"measured\" or a compute time in ms")

@@ -239,6 +239,11 @@ TEST(RunRecord, SummaryRoundTripsAndRefusesOtherSchemas) {
   const RunSummary back = summary_from_json(nlohmann::json::parse(to_json(s).dump()), "x.json");
   EXPECT_EQ(to_json(back).dump(), to_json(s).dump());
   EXPECT_EQ(back.label(), "C/GMRES (FD, adjoint) N=25 kmax=10");
+  // a task as run names its solver; a record whose task leaves it unnamed is read as C/GMRES
+  nlohmann::json unnamed = to_json(s);
+  ASSERT_EQ(unnamed.at("task").at("solver"), "cgmres");
+  unnamed.at("task").erase("solver");
+  EXPECT_EQ(summary_from_json(unnamed, "x.json").task.solver, "cgmres");
   RunSummary multiple = back;
   multiple.task.shooting = "multiple";
   EXPECT_EQ(multiple.label(), "C/GMRES (FD, adjoint, multiple shooting) N=25 kmax=10");

@@ -27,7 +27,8 @@ Task moving_reach(const std::string& formulation, const std::string& latency) {
   Task task = task_from_json(
       {{"model", IDMPC_SOURCE_DIR "/mjcf/arm4.xml"}, {"q0", {-0.5, 0.3, 0, 0}}, {"qref", "q0"},
        {"reference", {{"shape", "line"}, {"to", {-0.2, 0.6, 0.3, 0.3}}, {"duration", 0.1}}},
-       {"offset_free", false}, {"torque_limit", 60}, {"cgmres", {{"alpha", 1}, {"init_full_horizon", false}}}},
+       {"offset_free", false}, {"torque_limit", 60}, {"solver", "cgmres"},
+       {"cgmres", {{"alpha", 1}, {"init_full_horizon", false}}}},
       "moving reach", arm_defaults());
   task.formulation = formulation;
   task.duration = kDuration;

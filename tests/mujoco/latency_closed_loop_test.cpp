@@ -43,7 +43,7 @@ Task swingup(const std::string& formulation, const std::string& latency) {
 Task reach(const std::string& formulation, const std::string& latency) {
   Task task = task_from_json(
       {{"model", IDMPC_SOURCE_DIR "/mjcf/arm4.xml"}, {"q0", {-0.5, 0.3, 0, 0}}, {"qref", {0, 0, 0, 0}},
-       {"torque_limit", 60}, {"cgmres", {{"alpha", 1}, {"init_full_horizon", false}}}},
+       {"torque_limit", 60}, {"solver", "cgmres"}, {"cgmres", {{"alpha", 1}, {"init_full_horizon", false}}}},
       "reach", arm_defaults());
   task.formulation = formulation;
   task.duration = kDuration;

@@ -221,6 +221,36 @@ TEST(TaskRun, AControllerBuiltFromItsSettingsIsTheOneItRuns) {
   }
 }
 
+// Solver "auto", a real arm's default (horizon_setup.hpp): the run drives the solver its setup
+// chose, the same in both formulations, and its task and summary record that one, so that the
+// task as run can be run again
+TEST(TaskRun, AutoSolverIsChosenOnceAndRecorded) {
+  Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/ur5e_reach.json");
+  ASSERT_EQ(task.solver, "auto") << "the real arms' default";
+  task.duration = 0.01;
+  double lambda = 0;
+  {
+    const mj::TaskRun probe(task);
+    lambda = probe.horizon().open_loop_rate;
+  }
+  ASSERT_GT(lambda, 0.5) << "the case needs an unstable open loop";
+  for (const auto& [growth, expected] : {std::pair{1.05, "riccati"}, std::pair{0.95, "cgmres"}}) {
+    for (const char* formulation : {"fd", "id"}) {
+      SCOPED_TRACE(std::string(formulation) + " at λT_f = " + std::to_string(growth * kIllConditionedGrowth));
+      Task t = task;
+      t.formulation = formulation;
+      t.Tf = growth * kIllConditionedGrowth / lambda;
+      mj::TaskRun run(t);
+      EXPECT_EQ(to_string(run.controller().solver_kind()), expected);
+      EXPECT_EQ(to_string(run.settings().solver), expected);
+      EXPECT_EQ(run.task().solver, expected);
+      const RunSummary s = run.summary(run.run());
+      EXPECT_EQ(s.task.solver, expected);
+      EXPECT_EQ(to_json(s.task).at("solver"), expected) << "the task as run names it";
+    }
+  }
+}
+
 // a task from JSON text, as if read from `name` in the shipped mjcf/ directory
 Task task_in_mjcf(const std::string& json, const std::string& name = "t.json") {
   Task t = task_from_json(nlohmann::json::parse(json), "task file '" + name + "'", arm_defaults());

@@ -318,7 +318,7 @@ nlohmann::json to_json(const RunSummary& s) {
   nlohmann::json j;
   j["schema"] = s.schema;
   j["task"] = to_json(s.task);
-  j["solver"] = s.task.solver;  // the task leaves out the default, C/GMRES
+  j["solver"] = s.task.solver;  // the one that ran (the task's "auto" resolved)
   j["n"] = s.n;
   if (!s.joint_names.empty()) {
     j["joint_names"] = s.joint_names;
@@ -505,7 +505,10 @@ RunSummary summary_from_json(const nlohmann::json& j, const std::string& source)
   RunSummary s;
   try {
     try {
-      s.task = task_from_json(j.at("task"), where + ", 'task'", Task{});
+      // a task as run names its solver; one that leaves it unnamed is read as C/GMRES
+      Task as_run;
+      as_run.solver = "cgmres";
+      s.task = task_from_json(j.at("task"), where + ", 'task'", as_run);
     } catch (const std::invalid_argument& e) {
       throw std::runtime_error(e.what());
     }

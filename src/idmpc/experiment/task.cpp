@@ -376,9 +376,10 @@ nlohmann::json to_json(const Task& t) {
   j["cgmres"] = {{"N", t.N},   {"kmax", t.kmax > 0 ? json(t.kmax) : json("auto")}, {"Tf", t.Tf}, {"alpha", t.alpha},
                  {"dt", t.dt}, {"zeta", t.zeta}, {"h", t.h}, {"init_full_horizon", t.init_full_horizon},
                  {"shooting", t.shooting}, {"products", t.products}};
-  // written only for the Riccati solver: a C/GMRES task reads and hashes as it always has
+  // the solver always named (a task's default is "auto", a task as run names the one that ran, so
+  // that running it again runs that one); the Riccati settings where it may run
+  j["solver"] = t.solver;
   if (t.solver != "cgmres") {
-    j["solver"] = t.solver;
     const RiccatiSettings& rs = t.riccati;
     j["riccati"] = {{"iterations", rs.iterations},         {"tolerance", rs.tolerance},
                     {"init_iterations", rs.init_iterations}, {"init_tolerance", rs.init_tolerance},

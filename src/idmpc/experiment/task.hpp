@@ -48,9 +48,11 @@
 ///                  default), "measured" (each update's wall time) or a compute time in ms (a
 ///                  number): the torque of an update reaches the plant ⌈t_compute/δt⌉ plant steps
 ///                  after its measurement (mj::ClosedLoopSettings::latency)
-///   "solver"       "cgmres" (the default) or "riccati" (Gauss–Newton SQP with a Riccati
-///                  recursion: solver/riccati.hpp); the horizon (N, Tf) and dt are the "cgmres"
-///                  object's for both
+///   "solver"       "cgmres", "riccati" (Gauss–Newton SQP with a Riccati recursion:
+///                  solver/riccati.hpp) or "auto" (the default: the Riccati recursion where the
+///                  open loop grows faster than C/GMRES's rollout in FD can be conditioned,
+///                  C/GMRES elsewhere; horizon_setup.hpp); the horizon (N, Tf) and dt are the
+///                  "cgmres" object's for both
 ///   "riccati"      {"iterations" per update (1: real-time iteration), "tolerance",
 ///                  "init_iterations", "init_tolerance", "barrier", "line_search"}
 ///   "cgmres"       {"N", "kmax" (or "auto"), "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",
@@ -117,7 +119,7 @@ struct Task {
   std::string shooting;  ///< "single" or "multiple"
   std::string products;  ///< "difference" or "exact" (formulations.md §Exact products)
   std::string latency = "none";  ///< "none", "measured" or a compute time in ms (parse_latency)
-  std::string solver = "cgmres";  ///< "cgmres" or "riccati"
+  std::string solver = "auto";    ///< "cgmres", "riccati" or "auto" (mj::TaskRun records the one chosen)
   RiccatiSettings riccati;        ///< the Riccati solver's settings
 };
 

@@ -144,13 +144,10 @@ TaskRun::TaskRun(const Task& task)
   ControllerSettings& cs = resolved_.controller;
   // kmax "auto": more GMRES iterations for an under-actuated model's stages (task.hpp); the
   // task as run records the number
-  if (task_.kmax == 0) {
+  const bool kmax_auto = task_.kmax == 0;
+  if (kmax_auto) {
     task_.kmax = model_->under_actuated() ? kUnderActuatedKmax : kDefaultKmax;
     cs.cgmres.kmax = task_.kmax;
-    if (model_->under_actuated() && cs.solver == SolverKind::kCgmres) {
-      auto_notes_.push_back("kmax \"auto\": " + std::to_string(task_.kmax) +
-                            " GMRES iterations per update (an under-actuated model)");
-    }
   }
   cs.q_start = resolved_.q0;
   cs.frame_target = frame_target_;
@@ -161,6 +158,13 @@ TaskRun::TaskRun(const Task& task)
   cs.plant_step = plant_->timestep();
   controller_ = std::make_unique<Controller>(model_, cs);
   const HorizonSetup& setup = *controller_->horizon_setup();
+  // solver "auto": the task as run records the one the setup chose
+  cs.solver = setup.solver;
+  task_.solver = to_string(setup.solver);
+  if (kmax_auto && model_->under_actuated() && cs.solver == SolverKind::kCgmres) {
+    auto_notes_.push_back("kmax \"auto\": " + std::to_string(task_.kmax) +
+                          " GMRES iterations per update (an under-actuated model)");
+  }
 
   // what the run does not model, had to change or chose by itself
   if (!models_.full.translations.empty()) notices_.push_back(models_.full.notice());

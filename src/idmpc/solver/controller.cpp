@@ -41,9 +41,9 @@ std::shared_ptr<const HorizonSetup> checked_setup(const std::shared_ptr<const Mo
   return std::make_shared<const HorizonSetup>(setup_horizon(*model, settings));
 }
 
-// the solver of `settings` over `problem`
-std::unique_ptr<MpcSolver> make_solver(OcpProblem problem, const ControllerSettings& s) {
-  if (s.solver == SolverKind::kRiccati) {
+// the solver `setup` chose for `settings` (their own, or "auto" resolved) over `problem`
+std::unique_ptr<MpcSolver> make_solver(OcpProblem problem, const ControllerSettings& s, const HorizonSetup& setup) {
+  if (setup.solver == SolverKind::kRiccati) {
     return std::make_unique<RiccatiSolver>(std::move(problem), s.cgmres.Tf, s.cgmres.dt, s.riccati);
   }
   auto solver = std::make_unique<CgmresMpc>(std::move(problem), s.cgmres);
@@ -70,7 +70,7 @@ Controller::Controller(std::shared_ptr<const Model> model, const ControllerSetti
     : Controller(settings, checked_setup(model, settings)) {}
 
 Controller::Controller(const ControllerSettings& settings, std::shared_ptr<const HorizonSetup> setup)
-    : Controller(make_solver(make_problem(*setup, settings), settings), setup->plant_model) {
+    : Controller(make_solver(make_problem(*setup, settings), settings, *setup), setup->plant_model) {
   setup_ = std::move(setup);
   const int n = this->n();
   if (settings.torque_lower.size() == n) {

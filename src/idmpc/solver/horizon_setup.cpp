@@ -169,15 +169,15 @@ namespace {
 
 // the LQR value of the fixed joint target of an under-actuated model (horizon_setup.hpp), or
 // empty with a note saying why not
-MatX<double> terminal_lqr(const Model& model, const ControllerSettings& s, const OcpWeights& w, double dtau,
-                          std::vector<std::string>& notes) {
+MatX<double> terminal_lqr(const Model& model, const ControllerSettings& s, SolverKind solver, const OcpWeights& w,
+                          double dtau, std::vector<std::string>& notes) {
   const int n = model.n, nu = model.n_actuated();
   if (!model.under_actuated()) return {};
   if (s.frame_target) {
     notes.push_back("under-actuated with a frame target: the terminal cost keeps its diagonal weights");
     return {};
   }
-  if (s.solver == SolverKind::kCgmres && s.cgmres.alpha != 0) {
+  if (solver == SolverKind::kCgmres && s.cgmres.alpha != 0) {
     // a growing horizon: its step is not the one P is for, and a swing-up starts far from the
     // target, where the target's LQR value means nothing
     notes.push_back("under-actuated with a growing horizon (alpha > 0): the terminal cost keeps its diagonal weights");
@@ -268,28 +268,6 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   const VecX<double> upper = s.torque_upper.size() == n ? s.torque_upper : infinite;
   const VecX<double> friction_loss = s.friction_loss.size() == n ? s.friction_loss : VecX<double>::Zero(n);
 
-  // damping: explicit unless asked for, or unstable with "auto"; implicit needs a fixed horizon
-  const double ratio = dtau * damping_rate(model, configurations);
-  const bool fixed_horizon = s.solver == SolverKind::kRiccati || s.cgmres.alpha == 0;
-  bool implicit = s.implicit_damping == ImplicitDamping::kOn;
-  if (implicit && !fixed_horizon) {
-    throw std::invalid_argument("controller settings: implicit damping needs a fixed horizon (cgmres.alpha = 0): "
-                                "its step T_f/N is built into the horizon model");
-  }
-  if (s.implicit_damping == ImplicitDamping::kAuto && ratio > 1) {
-    if (fixed_horizon) {
-      implicit = true;
-      notes.push_back("joint damping integrated implicitly in the horizon (implicit_damping \"auto\"): "
-                      "dtau*max eig(M^-1 D) = " + text(ratio) + " > 1, the explicit Euler step would be unstable");
-    } else {
-      notes.push_back("joint damping makes the explicit horizon step unstable (dtau*max eig(M^-1 D) = " + text(ratio) +
-                      " > 1 at the longest step) and implicit damping needs a fixed horizon: use --alpha 0");
-    }
-  }
-  const double implicit_step = implicit ? dtau : 0.0;
-  // the inertia the horizon step sees: with implicit damping M + Δτ·D
-  const Model stepped = with_implicit_damping(model, implicit_step);
-
   // friction loss: f·tanh(v/ε), ε given or the smallest with a stable explicit step
   VecX<double> eps = VecX<double>::Zero(n);
   if ((friction_loss.array() > 0).any()) {
@@ -309,19 +287,52 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   }
   // (without friction loss given, the model keeps its own friction terms, if any)
   const Model with_friction = s.friction_loss.size() == n ? with_joint_friction(model, friction_loss, eps) : model;
-  auto horizon_model = std::make_shared<const Model>(with_implicit_damping(with_friction, implicit_step));
-  auto plant_model = std::make_shared<const Model>(with_implicit_damping(with_friction, s.plant_step));
-  OcpWeights weights = auto_weights(s, configurations, with_friction, stepped, dtau, lower, upper, notes);
-  MatX<double> terminal = terminal_lqr(*horizon_model, s, weights, dtau, notes);
-  // the open loop of the horizon's dynamics (its damping as the plant has it, not the step's)
+  // the open loop of the horizon's dynamics (its damping as the plant has it, not the step's), and
+  // the solver "auto" chooses from it, the same for both formulations
   const double lambda = open_loop_rate(with_friction, configurations);
-  if (s.formulation == Formulation::kForwardDynamics && s.solver == SolverKind::kCgmres &&
-      lambda * s.cgmres.Tf > kIllConditionedGrowth) {
+  const bool ill_conditioned = lambda * s.cgmres.Tf > kIllConditionedGrowth;
+  SolverKind solver = s.solver;
+  if (solver == SolverKind::kAuto) {
+    solver = ill_conditioned && !model.under_actuated() ? SolverKind::kRiccati : SolverKind::kCgmres;
+    if (solver == SolverKind::kRiccati) {
+      notes.push_back("solver \"auto\": Riccati in both formulations, the open loop diverging at " + text(lambda) +
+                      " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) + " over Tf), where FD's C/GMRES rollout is "
+                      "ill-conditioned (--solver cgmres to force it)");
+    }
+  }
+  if (s.formulation == Formulation::kForwardDynamics && solver == SolverKind::kCgmres && ill_conditioned) {
     notes.push_back("the open loop diverges at " + text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) +
                     " over Tf): FD's single-shooting rollout is ill-conditioned for C/GMRES here; ID's or the "
                     "Riccati solver's is not");
   }
-  return HorizonSetup{std::move(plant_model), std::move(horizon_model), std::move(weights), implicit, ratio,
+
+  // damping: explicit unless asked for, or unstable with "auto"; implicit needs a fixed horizon
+  const double ratio = dtau * damping_rate(model, configurations);
+  const bool fixed_horizon = solver == SolverKind::kRiccati || s.cgmres.alpha == 0;
+  bool implicit = s.implicit_damping == ImplicitDamping::kOn;
+  if (implicit && !fixed_horizon) {
+    throw std::invalid_argument("controller settings: implicit damping needs a fixed horizon (cgmres.alpha = 0): "
+                                "its step T_f/N is built into the horizon model");
+  }
+  if (s.implicit_damping == ImplicitDamping::kAuto && ratio > 1) {
+    if (fixed_horizon) {
+      implicit = true;
+      notes.push_back("joint damping integrated implicitly in the horizon (implicit_damping \"auto\"): "
+                      "dtau*max eig(M^-1 D) = " + text(ratio) + " > 1, the explicit Euler step would be unstable");
+    } else {
+      notes.push_back("joint damping makes the explicit horizon step unstable (dtau*max eig(M^-1 D) = " + text(ratio) +
+                      " > 1 at the longest step) and implicit damping needs a fixed horizon: use --alpha 0");
+    }
+  }
+  const double implicit_step = implicit ? dtau : 0.0;
+  // the inertia the horizon step sees: with implicit damping M + Δτ·D
+  const Model stepped = with_implicit_damping(model, implicit_step);
+
+  auto horizon_model = std::make_shared<const Model>(with_implicit_damping(with_friction, implicit_step));
+  auto plant_model = std::make_shared<const Model>(with_implicit_damping(with_friction, s.plant_step));
+  OcpWeights weights = auto_weights(s, configurations, with_friction, stepped, dtau, lower, upper, notes);
+  MatX<double> terminal = terminal_lqr(*horizon_model, s, solver, weights, dtau, notes);
+  return HorizonSetup{std::move(plant_model), std::move(horizon_model), std::move(weights), solver, implicit, ratio,
                       lambda, std::move(eps), std::move(notes), std::move(terminal)};
 }
 

@@ -14,9 +14,11 @@
 
 namespace idmpc {
 
-/// @brief The solver family: C/GMRES, or Gauss–Newton SQP with a Riccati recursion.
-enum class SolverKind { kCgmres, kRiccati };
-/// @brief "cgmres"/"riccati"; parse throws std::invalid_argument naming the value.
+/// @brief The solver family: C/GMRES, or Gauss–Newton SQP with a Riccati recursion. kAuto is a
+/// setting only (ControllerSettings::solver): the horizon setup resolves it on the model
+/// (horizon_setup.hpp); no solver is of that kind.
+enum class SolverKind { kCgmres, kRiccati, kAuto };
+/// @brief "cgmres"/"riccati"/"auto"; parse throws std::invalid_argument naming the value.
 std::string to_string(SolverKind s);
 SolverKind parse_solver(const std::string& s);
 

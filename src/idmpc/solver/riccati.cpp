@@ -33,12 +33,15 @@ std::string text(double x) {
 
 }  // namespace
 
-std::string to_string(SolverKind s) { return s == SolverKind::kCgmres ? "cgmres" : "riccati"; }
+std::string to_string(SolverKind s) {
+  return s == SolverKind::kCgmres ? "cgmres" : s == SolverKind::kRiccati ? "riccati" : "auto";
+}
 
 SolverKind parse_solver(const std::string& s) {
   if (s == "cgmres") return SolverKind::kCgmres;
   if (s == "riccati") return SolverKind::kRiccati;
-  throw std::invalid_argument("unknown solver '" + s + "': expected 'cgmres' or 'riccati'");
+  if (s == "auto") return SolverKind::kAuto;
+  throw std::invalid_argument("unknown solver '" + s + "': expected 'cgmres', 'riccati' or 'auto'");
 }
 
 void RiccatiSettings::validate() const {
