@@ -203,6 +203,9 @@ std::vector<Cell> grid_of(const SweepOptions& opt, const PaperTables& tables, co
   std::vector<std::string> solvers;
   if (opt.solver == "both") {
     solvers = {"cgmres", "riccati"};
+  } else if (opt.solver == "auto") {
+    // a sweep's cells compare named solver families; "auto" chooses one per model (swingup)
+    throw std::invalid_argument("--solver auto: a sweep names its solvers, cgmres, riccati or both");
   } else {
     parse_solver(opt.solver);
     solvers = {opt.solver};

@@ -915,6 +915,9 @@ TEST_F(Cli, SweepHasAWorkPrecisionTable) {
   EXPECT_NE(bad.code, 0);
   EXPECT_NE(bad.err.find("products must be 'difference' or 'exact', got 'finite'"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  // a sweep compares named solver families: "auto", swingup's choice per model, is refused
+  expect_error(idmpc("sweep --tables work-precision --solver auto --out bad"), {"--solver auto", "cgmres, riccati or both"});
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 
 // a list that cannot be read, or that names a task that cannot run, is refused with one line
