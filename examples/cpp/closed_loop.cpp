@@ -1,7 +1,7 @@
 // A MuJoCo loop of your own with an idmpc controller: the controller's settings come from a task
 // file (model, target, weights, limits, the plant's friction and damping) as `idmpc swingup` makes
 // them, here with the formulation and solver you choose; the simulation is plain MuJoCo, stepped
-// here. Usage: closed_loop [TASK.json [STEPS [fd|id [cgmres|riccati]]]] (default: the paper's
+// here. Usage: closed_loop [TASK.json [STEPS [fd|id [cgmres|riccati|auto]]]] (default: the paper's
 // swing-up task from idmpc's data directory, IDMPC_DATA_DIR or share/idmpc beside the executable;
 // 1000 steps; the task's formulation and solver).
 #include <cstdlib>
@@ -26,7 +26,7 @@ int main(int argc, char** argv) try {
   if (argc > 3) settings.formulation = idmpc::parse_formulation(argv[3]);
   if (argc > 4) settings.solver = idmpc::parse_solver(argv[4]);
   idmpc::Controller controller(run.shared_model(), settings);
-  std::cout << idmpc::to_string(settings.solver) << " (" << idmpc::to_string(settings.formulation) << ") on "
+  std::cout << idmpc::to_string(controller.solver_kind()) << " (" << idmpc::to_string(settings.formulation) << ") on "
             << task.model << "\n";
 
   // your simulation: the task's model (newer MJCF translated for this MuJoCo as idmpc reads it),
