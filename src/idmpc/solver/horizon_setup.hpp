@@ -31,10 +31,11 @@
 ///   start, and named in the divergence hint with what applies.
 /// - Solver "auto": the Riccati recursion where λT_f > kIllConditionedGrowth on a fully actuated
 ///   model, C/GMRES elsewhere; decided on the model, the start, the target and T_f, never on the
-///   formulation, so that FD and ID are compared under one solver. On the generated arms FD's
-///   C/GMRES diverged on 5 of the 7 such arms of each set of 36, the Riccati recursion on none in
-///   either formulation. Under-actuated models keep C/GMRES: their target is unstable by
-///   construction (the passive joints'), and C/GMRES swings them up in both formulations.
+///   formulation, so that FD and ID are compared under one solver. On three generated sets of 36
+///   arms FD's C/GMRES diverged on 5, 5 and 4 of the 7, 7 and 6 such arms; the Riccati recursion
+///   diverged on none in either formulation and reached every arm C/GMRES reached. Under-actuated
+///   models keep C/GMRES: their target is unstable by construction (the passive joints'), and
+///   C/GMRES swings them up in both formulations.
 /// - The plant model (torque rule, observer) takes the damping implicitly over one plant step, as
 ///   MuJoCo's Euler and implicit integrators do.
 /// - An under-actuated model's terminal cost is the LQR value ½eᵀP e of its fixed joint target
@@ -59,7 +60,8 @@ namespace idmpc {
 
 /// @brief λT_f above which FD's single-shooting rollout is ill-conditioned for C/GMRES (an
 /// amplification e^4.5 ≈ 90 over the horizon): on generated arms, FD's C/GMRES diverged on 5 of the 7
-/// arms above it in each of two sets of 36, and on 1 and 2 of the 29 below it.
+/// arms above it in each of the two sets of 36 the line was drawn on, and on 1 and 2 of the 29
+/// below it; on a third set, 4 of 6 above and 4 of 30 below.
 inline constexpr double kIllConditionedGrowth = 4.5;
 
 /// @brief The smallest smoothing velocity of "auto" friction [rad/s or m/s].
