@@ -400,6 +400,7 @@ void BM_UnderActuated(benchmark::State& state, Formulation formulation, int kmax
     UnderActuatedFixture& f = *current;
     f.key = key;
     Task task = load_task(shipped_mjcf_path("cartpole_swingup.json"));
+    task.solver = "cgmres";  // the C/GMRES update is what is timed
     task.formulation = to_string(formulation);
     task.kmax = kmax;
     task.duration = kRecordSeconds;

@@ -49,10 +49,10 @@
 ///                  number): the torque of an update reaches the plant ⌈t_compute/δt⌉ plant steps
 ///                  after its measurement (mj::ClosedLoopSettings::latency)
 ///   "solver"       "cgmres", "riccati" (Gauss–Newton SQP with a Riccati recursion:
-///                  solver/riccati.hpp) or "auto" (the default: the Riccati recursion where the
-///                  open loop grows faster than C/GMRES's rollout in FD can be conditioned,
-///                  C/GMRES elsewhere; horizon_setup.hpp); the horizon (N, Tf) and dt are the
-///                  "cgmres" object's for both
+///                  solver/riccati.hpp) or "auto" (the default: the Riccati recursion where a
+///                  fully actuated model's open loop grows faster than C/GMRES's rollout in FD
+///                  can be conditioned, C/GMRES elsewhere; horizon_setup.hpp); the horizon
+///                  (N, Tf) and dt are the "cgmres" object's for both
 ///   "riccati"      {"iterations" per update (1: real-time iteration), "tolerance",
 ///                  "init_iterations", "init_tolerance", "barrier", "line_search"}
 ///   "cgmres"       {"N", "kmax" (or "auto"), "Tf", "alpha", "dt", "zeta" (0 = 1/dt), "h",

@@ -33,7 +33,9 @@ struct ControllerSettings {
   Formulation formulation = Formulation::kInverseDynamics;
   DerivativeMode derivatives = DerivativeMode::kAdjoint;
   int N = 25;                 ///< horizon stages
-  /// @brief The solver family (mpc_solver.hpp): C/GMRES or the Riccati recursion.
+  /// @brief The solver family (mpc_solver.hpp): C/GMRES (the default here), the Riccati
+  /// recursion, or kAuto, resolved by the horizon setup (horizon_setup.hpp;
+  /// Controller::solver_kind() says which).
   SolverKind solver = SolverKind::kCgmres;
   /// @brief The sampling period Δt and the horizon T_f (both solvers); α, kmax, ζ, h, shooting
   /// scheme, products and start (C/GMRES).
