@@ -291,19 +291,19 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   // the solver "auto" chooses from it, the same for both formulations
   const double lambda = open_loop_rate(with_friction, configurations);
   const bool ill_conditioned = lambda * s.cgmres.Tf > kIllConditionedGrowth;
+  const std::string growth = text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) + " over Tf)";
   SolverKind solver = s.solver;
   if (solver == SolverKind::kAuto) {
     solver = ill_conditioned && !model.under_actuated() ? SolverKind::kRiccati : SolverKind::kCgmres;
     if (solver == SolverKind::kRiccati) {
-      notes.push_back("solver \"auto\": Riccati in both formulations, the open loop diverging at " + text(lambda) +
-                      " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) + " over Tf), where FD's C/GMRES rollout is "
-                      "ill-conditioned (--solver cgmres to force it)");
+      notes.push_back("solver \"auto\": Riccati in both formulations, the open loop diverging at " + growth +
+                      ", where FD's C/GMRES rollout is ill-conditioned (--solver cgmres to force it)");
     }
   }
   if (s.formulation == Formulation::kForwardDynamics && solver == SolverKind::kCgmres && ill_conditioned) {
-    notes.push_back("the open loop diverges at " + text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) +
-                    " over Tf): FD's single-shooting rollout is ill-conditioned for C/GMRES here; ID's or the "
-                    "Riccati solver's is not");
+    notes.push_back("the open loop diverges at " + growth +
+                    ": FD's single-shooting rollout is ill-conditioned for C/GMRES here; ID's or the Riccati "
+                    "solver's is not");
   }
 
   // damping: explicit unless asked for, or unstable with "auto"; implicit needs a fixed horizon
