@@ -285,6 +285,7 @@ def write_report(a, arms, results):
 
     # the open loop's growth over the horizon, e^{λT_f}, from the runs' summaries (the same model for
     # both formulations): above e^4.5 FD's single-shooting rollout is ill-conditioned for C/GMRES
+    # (said at start where FD runs under C/GMRES)
     def open_loop(nm):
         r = results[(nm, "fd")]
         if "lambda" not in r:
@@ -304,8 +305,8 @@ def write_report(a, arms, results):
               (diverged["fd"], diverged["id"], errors["fd"], errors["id"], excess["fd"], excess["id"]), ""]
     if a.solver == "auto":
         chosen = {f: sorted(n for n in names if results[(n, f)].get("solver") == "riccati") for f in ("fd", "id")}
-        lines += ["Solver \"auto\" chose the Riccati recursion for %d arms (the same in both formulations: %s), "
-                  "C/GMRES for the others." % (len(chosen["fd"]), "yes" if chosen["fd"] == chosen["id"] else "NO"), ""]
+        lines += ["Solver \"auto\" ran the Riccati recursion on %d of the %d arms (C/GMRES on the rest), the same in "
+                  "both formulations: %s." % (len(chosen["fd"]), len(names), "yes" if chosen["fd"] == chosen["id"] else "NO"), ""]
     lines += ["## Runs that did not reach", "",
               "| arm | dof | actuators | scale [kg] | start | gravcomp | λ [1/s] | solver | FD | ID |",
               "|---|---|---|---|---|---|---|---|---|---|"]

@@ -183,8 +183,8 @@ void bind_control(py::module_& m) {
       .def_property(
           "solver", [](const ControllerSettings& s) { return to_string(s.solver); },
           [](ControllerSettings& s, const std::string& x) { s.solver = parse_solver(x); },
-          "\"cgmres\" (the default), \"riccati\" or \"auto\" (the Riccati recursion where FD's C/GMRES rollout is "
-          "ill-conditioned; Controller.solver says which)")
+          "\"cgmres\" (the default), \"riccati\" or \"auto\" (the Riccati recursion on a fully actuated model, "
+          "C/GMRES on an under-actuated one; Controller.solver says which)")
       .def_readwrite("cgmres", &ControllerSettings::cgmres)
       .def_readwrite("riccati", &ControllerSettings::riccati)
       .def_readwrite("weights", &ControllerSettings::weights)

@@ -306,27 +306,27 @@ def test_the_riccati_solver_from_a_task_and_from_settings():
 
 
 def test_auto_solver_is_resolved_on_the_model_and_recorded():
-    # a real arm's task defaults to "auto"; a horizon long enough for the open loop to grow past
-    # e^4.5 makes it the Riccati recursion in both formulations, a short one C/GMRES, and the run's
-    # task, controller and summary all name the one chosen
-    task = idmpc.load_task(str(MJCF / "ur5e_reach.json"))
-    assert task.solver == "auto"
-    task.duration = 0.01
-    for tf, expected in ((4.0, "riccati"), (0.1, "cgmres")):
-        for formulation in ("fd", "id"):
-            task.Tf = tf
-            task.formulation = formulation
-            run = idmpc.TaskRun(task)
-            assert run.controller.solver == expected
-            assert run.task.solver == expected
-            assert run.settings.solver == expected
-            assert run.run()["summary"]["task"]["solver"] == expected
-    # a controller built by hand from settings with "auto" says which it runs
-    task.Tf = 4.0
-    run = idmpc.TaskRun(task)
-    settings = run.settings
-    settings.solver = "auto"
-    assert idmpc.Controller(run.model, settings).solver == "riccati"
+    # a task defaults to "auto": the Riccati recursion on a real arm (whatever its horizon), C/GMRES
+    # on the cart-pole (under-actuated), the same in both formulations; the run's task, controller
+    # and summary all name the one chosen
+    for name, expected in (("ur5e_reach.json", "riccati"), ("cartpole_swingup.json", "cgmres")):
+        task = idmpc.load_task(str(MJCF / name))
+        assert task.solver == "auto"
+        task.duration = 0.01
+        for tf in (0.1, 2.0):
+            for formulation in ("fd", "id"):
+                task.Tf = tf
+                task.formulation = formulation
+                run = idmpc.TaskRun(task)
+                assert run.controller.solver == expected
+                assert run.task.solver == expected
+                assert run.settings.solver == expected
+                assert run.run()["summary"]["task"]["solver"] == expected
+        # a controller built by hand from settings with "auto" says which it runs
+        run = idmpc.TaskRun(task)
+        settings = run.settings
+        settings.solver = "auto"
+        assert idmpc.Controller(run.model, settings).solver == expected
 
 
 @pytest.mark.parametrize("solver", ["cgmres", "riccati"])

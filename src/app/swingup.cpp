@@ -51,8 +51,8 @@ void add_task_options(CLI::App& sub, TaskOverrides& o) {
       [](const Task& s, Task& d) { d.formulation = s.formulation; });
   add(sub.add_option("--solver", t.solver,
                      "cgmres (C/GMRES, the paper's), riccati (Gauss-Newton SQP with a Riccati recursion) or auto "
-                     "(a task file's default; the paper's task names cgmres): riccati where FD's C/GMRES rollout is "
-                     "ill-conditioned, docs/solvers.md"),
+                     "(a task file's default; the paper's task names cgmres): riccati on a fully actuated model, cgmres on an "
+                     "under-actuated one, docs/solvers.md"),
       [](const Task& s, Task& d) { d.solver = s.solver; });
   add(sub.add_option("--iterations", t.riccati.iterations,
                      "riccati: SQP iterations per update (1: real-time iteration)"),

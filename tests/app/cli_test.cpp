@@ -605,7 +605,7 @@ TEST_F(Cli, SwingupImplicitDampingLetsFdRunAHeavilyDampedArm) {
   xml.replace(xml.find(light), light.size(), R"(armature="0.1" damping="200")");
   write("ur5e_damped.xml", xml);
   write("task.json", R"({"model": "ur5e_damped.xml", "q0": "home", "qref": [-0.3, -2.5, 0.3, -1.6, -1.571, 0],
-    "formulation": "fd", "weights": {"Qq": 100, "Qv": 10, "R": 1e-3},
+    "formulation": "fd", "solver": "cgmres", "weights": {"Qq": 100, "Qv": 10, "R": 1e-3},
     "cgmres": {"Tf": 0.5, "alpha": 0, "init_full_horizon": true}})");
   // explicit: FD fails at t = 0, and the hint names the fix
   const Result exp = idmpc("swingup --task task.json --implicit-damping off --duration 0.05 --summary explicit.json");
@@ -629,6 +629,14 @@ TEST_F(Cli, SwingupImplicitDampingLetsFdRunAHeavilyDampedArm) {
   EXPECT_EQ(i["task"]["implicit_damping"], true);
   expect_error(idmpc("swingup --task task.json --implicit-damping on --alpha 1 --init-full-horizon false --duration 0.05"),
                {"--implicit-damping", "alpha = 0"});
+  // the Riccati solver's horizon is always fixed: with the default solver, on this fully actuated
+  // arm the Riccati recursion, alpha does not matter
+  const Result ric = idmpc("swingup --task task.json --solver auto --implicit-damping on --alpha 1 "
+                           "--init-full-horizon false --duration 0.05 --summary riccati.json");
+  ASSERT_EQ(ric.code, 2) << ric.err;
+  const nlohmann::json rj = nlohmann::json::parse(slurp(dir_ / "riccati.json"));
+  EXPECT_EQ(rj["solver"], "riccati");
+  EXPECT_EQ(rj["implicit_damping"], true);
   expect_error(idmpc("swingup --task task.json --implicit-damping sometimes --duration 0.05"),
                {"--implicit-damping", "sometimes"});
 }

@@ -174,7 +174,7 @@ TEST(HeldJoints, ThePandaReachesWithItsFingersHeldByTheirServo) {
   EXPECT_EQ(s.held_q, (std::vector<double>{0.04, 0.04}));
   // the log's joints by name and kind, and the solver, in the summary's JSON
   const nlohmann::json j = to_json(s);
-  EXPECT_EQ(j.at("solver"), "cgmres");
+  EXPECT_EQ(j.at("solver"), "riccati") << "the default solver on a fully actuated arm";
   EXPECT_EQ(j.at("joint_names").size(), 7u);
   EXPECT_EQ(j.at("joint_names")[0], "joint1");
   EXPECT_EQ(j.at("joint_types"), nlohmann::json(std::vector<std::string>(7, "hinge")));

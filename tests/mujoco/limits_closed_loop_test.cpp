@@ -1,6 +1,6 @@
 // Torque limits in the closed loop (formulations.md §Torque limits) on the shipped Panda reach task
 // (mjcf/panda_reach.json: home keyframe to a pose across the workspace, limits from the
-// actuators, full-horizon start), under MuJoCo, FD and ID. The limits bind at the start: the
+// actuators, full-horizon start), under MuJoCo, FD and ID by C/GMRES. The limits bind at the start: the
 // controllers command up to them (and, for a few milliseconds, slightly beyond: the clamp holds
 // the plant to them), then settle on the target, the torque reference holding it against
 // gravity.
@@ -27,6 +27,7 @@ class LimitsClosedLoop : public ::testing::TestWithParam<Formulation> {};
 TEST_P(LimitsClosedLoop, PandaReachStaysWithinItsTorqueLimitsAndSettles) {
   Task task = load_task(IDMPC_SOURCE_DIR "/mjcf/panda_reach.json");
   task.formulation = GetParam() == Formulation::kForwardDynamics ? "fd" : "id";
+  task.solver = "cgmres";  // the dummy-input limits of C/GMRES's problem (the Riccati solver's: riccati_test)
   task.derivatives = "adjoint";
   task.duration = 3.0;
   mj::TaskRun run(task);
@@ -59,7 +60,7 @@ INSTANTIATE_TEST_SUITE_P(Formulations, LimitsClosedLoop,
 // block) reaches its target under ID within its limits. With the limits' rows at R (uncapped) ID's
 // continuation diverged at 1.1 s; capped at the input's block (torque_limits.hpp) it reaches in
 // 2.5 s. FD is not run: it diverges on this arm for another reason, single shooting across its
-// fast unstable open loop (results.md), for which solver "auto" would run the Riccati recursion:
+// fast unstable open loop (results.md), where the Riccati recursion, solver "auto", does not:
 // C/GMRES is named.
 TEST(LimitsClosedLoopLightArm, IdsLimitRowsCappedAtItsBlockKeepItsContinuation) {
   Task task = load_task(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/light_servo_arm.json");

@@ -31,12 +31,14 @@ std::vector<std::string> tracking_tasks() {
   return nlohmann::json::parse(in).at("tasks").get<std::vector<std::string>>();
 }
 
-class TrackingClosedLoop : public ::testing::TestWithParam<std::tuple<std::string, Formulation>> {};
+// the task's default solver ("auto": the Riccati recursion on these arms) and the paper's C/GMRES
+class TrackingClosedLoop : public ::testing::TestWithParam<std::tuple<std::string, Formulation, std::string>> {};
 
 TEST_P(TrackingClosedLoop, ToolPointFollowsItsCircleWithinItsTorqueLimits) {
-  const auto& [file, formulation] = GetParam();
+  const auto& [file, formulation, solver] = GetParam();
   Task task = load_task(std::string(IDMPC_SOURCE_DIR "/mjcf/") + file);
   task.formulation = formulation == Formulation::kForwardDynamics ? "fd" : "id";
+  task.solver = solver;
   task.derivatives = "adjoint";
   task.duration = kDuration;
   mj::TaskRun run(task);
@@ -79,11 +81,12 @@ TEST_P(TrackingClosedLoop, ToolPointFollowsItsCircleWithinItsTorqueLimits) {
 INSTANTIATE_TEST_SUITE_P(
     ShippedArms, TrackingClosedLoop,
     ::testing::Combine(::testing::ValuesIn(tracking_tasks()),
-                       ::testing::Values(Formulation::kForwardDynamics, Formulation::kInverseDynamics)),
+                       ::testing::Values(Formulation::kForwardDynamics, Formulation::kInverseDynamics),
+                       ::testing::Values(std::string("auto"), std::string("cgmres"))),
     [](const auto& info) {
       std::string name = std::get<0>(info.param);
       name = name.substr(0, name.find('.'));
-      return name + "_" + to_string(std::get<1>(info.param));
+      return name + "_" + to_string(std::get<1>(info.param)) + "_" + std::get<2>(info.param);
     });
 
 }  // namespace

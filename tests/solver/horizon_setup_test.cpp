@@ -210,35 +210,37 @@ TEST(HorizonSetup, OpenLoopRateIsTheFastestGrowthOfTheLinearizedArm) {
   }
 }
 
-// Solver "auto" (horizon_setup.hpp): the Riccati recursion exactly where λT_f, λ from MuJoCo,
-// exceeds kIllConditionedGrowth on a fully actuated model, the same in both formulations and said
-// at start; C/GMRES below it and on an under-actuated model; a solver named is kept
-TEST(HorizonSetup, AutoSolverIsRiccatiWhereTheOpenLoopOutgrowsTheHorizon) {
-  auto said = [](const HorizonSetup& s) {
+// Solver "auto" (horizon_setup.hpp): the Riccati recursion on a fully actuated model whatever its
+// open loop (λT_f, λ from MuJoCo, on either side of the line of FD's C/GMRES notice), the same in
+// both formulations and said at start; C/GMRES on an under-actuated model, said too; a solver
+// named is kept
+TEST(HorizonSetup, AutoSolverIsRiccatiOnAFullyActuatedModelAndCgmresOnAnUnderActuatedOne) {
+  auto said = [](const HorizonSetup& s, const std::string& what) {
     return std::any_of(s.notes.begin(), s.notes.end(),
-                       [](const std::string& note) { return note.find("solver \"auto\": Riccati") == 0; });
+                       [&](const std::string& note) { return note.find("solver \"auto\": " + what) == 0; });
   };
   for (const std::string& path : {kArm4, kTree}) {
     SCOPED_TRACE(path);
     const test::Problem p = test::load_problem(path);
+    ASSERT_FALSE(p.model.under_actuated());
     ControllerSettings settings = settings_of(p.model, 1.0, 50);
     const double lambda = mujoco_open_loop_rate(p, {settings.q_start, settings.q_ref});
     ASSERT_GT(lambda, 1.0) << "the case needs an unstable open loop";
     for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
       settings.formulation = f;
-      settings.solver = SolverKind::kAuto;
-      settings.cgmres.Tf = 1.01 * kIllConditionedGrowth / lambda;
-      HorizonSetup setup = setup_horizon(p.model, settings);
-      EXPECT_EQ(setup.solver, SolverKind::kRiccati);
-      EXPECT_TRUE(said(setup));
-      settings.cgmres.Tf = 0.99 * kIllConditionedGrowth / lambda;
-      setup = setup_horizon(p.model, settings);
-      EXPECT_EQ(setup.solver, SolverKind::kCgmres);
-      EXPECT_FALSE(said(setup));
-      settings.cgmres.Tf = 1.01 * kIllConditionedGrowth / lambda;
-      for (const SolverKind named : {SolverKind::kCgmres, SolverKind::kRiccati}) {
-        settings.solver = named;
-        EXPECT_EQ(setup_horizon(p.model, settings).solver, named);
+      for (const double growth : {0.5, 0.99, 1.01, 2.0}) {
+        SCOPED_TRACE(growth);
+        settings.solver = SolverKind::kAuto;
+        settings.cgmres.Tf = growth * kIllConditionedGrowth / lambda;
+        const HorizonSetup setup = setup_horizon(p.model, settings);
+        EXPECT_EQ(setup.solver, SolverKind::kRiccati);
+        EXPECT_TRUE(said(setup, "Riccati in both formulations"));
+        for (const SolverKind named : {SolverKind::kCgmres, SolverKind::kRiccati}) {
+          settings.solver = named;
+          const HorizonSetup kept = setup_horizon(p.model, settings);
+          EXPECT_EQ(kept.solver, named);
+          EXPECT_FALSE(said(kept, "")) << "a solver named is not chosen";
+        }
       }
     }
   }
@@ -247,11 +249,14 @@ TEST(HorizonSetup, AutoSolverIsRiccatiWhereTheOpenLoopOutgrowsTheHorizon) {
   ASSERT_TRUE(cartpole.model.under_actuated());
   ControllerSettings s = settings_of(cartpole.model, 2.0, 50);
   s.q_ref = VecX<double>::Zero(cartpole.model.n);
-  s.solver = SolverKind::kAuto;
-  const HorizonSetup setup = setup_horizon(cartpole.model, s);
-  ASSERT_GT(setup.open_loop_rate * s.cgmres.Tf, kIllConditionedGrowth) << "the case needs a fast open loop";
-  EXPECT_EQ(setup.solver, SolverKind::kCgmres);
-  EXPECT_FALSE(said(setup));
+  for (const Formulation f : {Formulation::kForwardDynamics, Formulation::kInverseDynamics}) {
+    s.formulation = f;
+    s.solver = SolverKind::kAuto;
+    const HorizonSetup setup = setup_horizon(cartpole.model, s);
+    EXPECT_EQ(setup.solver, SolverKind::kCgmres);
+    EXPECT_TRUE(said(setup, "C/GMRES in both formulations"));
+    EXPECT_FALSE(said(setup, "Riccati"));
+  }
 }
 
 // Settings the rules cannot use are refused, naming the setting; without friction loss given the

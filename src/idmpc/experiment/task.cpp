@@ -523,7 +523,8 @@ ResolvedTask resolve(const Task& t, int n) {
                                 t.implicit_damping + "'");
   }
   c.implicit_damping = parse_implicit_damping(t.implicit_damping);
-  if (c.implicit_damping == ImplicitDamping::kOn && t.alpha != 0 && c.solver != SolverKind::kRiccati) {
+  // (under "auto" the controller's setup checks it on the solver it resolves)
+  if (c.implicit_damping == ImplicitDamping::kOn && t.alpha != 0 && c.solver == SolverKind::kCgmres) {
     throw std::invalid_argument("--implicit-damping (implicit_damping) needs a fixed horizon, alpha = 0 (its step is "
                                 "T_f/N), got alpha = " + text(t.alpha));
   }

@@ -49,9 +49,8 @@
 ///                  number): the torque of an update reaches the plant ⌈t_compute/δt⌉ plant steps
 ///                  after its measurement (mj::ClosedLoopSettings::latency)
 ///   "solver"       "cgmres", "riccati" (Gauss–Newton SQP with a Riccati recursion:
-///                  solver/riccati.hpp) or "auto" (the default: the Riccati recursion where a
-///                  fully actuated model's open loop grows faster than C/GMRES's rollout in FD
-///                  can be conditioned, C/GMRES elsewhere; horizon_setup.hpp); the horizon
+///                  solver/riccati.hpp) or "auto" (the default: the Riccati recursion on a fully
+///                  actuated model, C/GMRES on an under-actuated one; horizon_setup.hpp); the horizon
 ///                  (N, Tf) and dt are the "cgmres" object's for both
 ///   "riccati"      {"iterations" per update (1: real-time iteration), "tolerance",
 ///                  "init_iterations", "init_tolerance", "barrier", "line_search"}

@@ -287,18 +287,17 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   }
   // (without friction loss given, the model keeps its own friction terms, if any)
   const Model with_friction = s.friction_loss.size() == n ? with_joint_friction(model, friction_loss, eps) : model;
-  // the open loop of the horizon's dynamics (its damping as the plant has it, not the step's), and
-  // the solver "auto" chooses from it, the same for both formulations
+  // the open loop of the horizon's dynamics (its damping as the plant has it, not the step's)
   const double lambda = open_loop_rate(with_friction, configurations);
   const bool ill_conditioned = lambda * s.cgmres.Tf > kIllConditionedGrowth;
   const std::string growth = text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) + " over Tf)";
   SolverKind solver = s.solver;
   if (solver == SolverKind::kAuto) {
-    solver = ill_conditioned && !model.under_actuated() ? SolverKind::kRiccati : SolverKind::kCgmres;
-    if (solver == SolverKind::kRiccati) {
-      notes.push_back("solver \"auto\": Riccati in both formulations, the open loop diverging at " + growth +
-                      ", where FD's C/GMRES rollout is ill-conditioned (--solver cgmres to force it)");
-    }
+    solver = model.under_actuated() ? SolverKind::kCgmres : SolverKind::kRiccati;
+    notes.push_back(solver == SolverKind::kRiccati
+                        ? "solver \"auto\": Riccati in both formulations (a fully actuated model; --solver cgmres "
+                          "for the paper's C/GMRES)"
+                        : "solver \"auto\": C/GMRES in both formulations (an under-actuated model)");
   }
   if (s.formulation == Formulation::kForwardDynamics && solver == SolverKind::kCgmres && ill_conditioned) {
     notes.push_back("the open loop diverges at " + growth +
