@@ -35,8 +35,8 @@
 ///   per update; where it does not, FD's C/GMRES diverges in ways no quantity of the model
 ///   predicts (above the open-loop line mostly, below it too: light joints, where a continuation
 ///   step of 10 GMRES iterations cannot follow how fast F moves with the state). On four generated
-///   sets of 36 arms the Riccati recursion reached every arm C/GMRES reached, in both formulations
-///   (results.md, "The default solver"). Under-actuated models keep C/GMRES: their target is
+///   reach sets of 36 arms and one of circles the Riccati recursion reached every arm C/GMRES
+///   reached, in both formulations (results.md, "The default solver"). Under-actuated models keep C/GMRES: their target is
 ///   unstable by construction (the passive joints'), and C/GMRES swings the cart-pole up in both
 ///   formulations.
 /// - The plant model (torque rule, observer) takes the damping implicitly over one plant step, as
