@@ -245,6 +245,23 @@ TEST(TaskRun, AutoSolverIsChosenOnceAndRecorded) {
   }
 }
 
+// The Riccati solver's start on a fast unstable arm (tests/mujoco/fixtures/fast_open_loop_arm.xml:
+// λ = 30 1/s, R up to 2e6): from its initial guess the KKT residual exceeds 1e8 (the costates
+// through 25 unstable stages), which is no divergence while the iterates stay bounded; the
+// globalized iterations bring it to about 40 and the loop runs (the whole 6 s reach it makes)
+TEST(TaskRun, TheRiccatiStartIsNotStoppedByALargeInitialResidual) {
+  Task task = load_task(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/fast_open_loop_arm.json");
+  task.formulation = "fd";
+  task.duration = 0.01;
+  mj::TaskRun run(task);
+  ASSERT_EQ(to_string(run.controller().solver_kind()), "riccati");
+  ASSERT_GT(run.horizon().open_loop_rate, 20.0) << "the case needs a fast open loop";
+  const mj::RunResult r = run.run();
+  EXPECT_FALSE(r.diverged) << r.divergence_reason << " at " << r.diverged_at;
+  EXPECT_LT(r.init_residual, 1e3);
+  EXPECT_EQ(r.steps, 10);
+}
+
 // a task from JSON text, as if read from `name` in the shipped mjcf/ directory
 Task task_in_mjcf(const std::string& json, const std::string& name = "t.json") {
   Task t = task_from_json(nlohmann::json::parse(json), "task file '" + name + "'", arm_defaults());
