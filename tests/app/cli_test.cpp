@@ -629,8 +629,8 @@ TEST_F(Cli, SwingupImplicitDampingLetsFdRunAHeavilyDampedArm) {
   EXPECT_EQ(i["task"]["implicit_damping"], true);
   expect_error(idmpc("swingup --task task.json --implicit-damping on --alpha 1 --init-full-horizon false --duration 0.05"),
                {"--implicit-damping", "alpha = 0"});
-  // the Riccati solver's horizon is always fixed: with the default solver, on this fully actuated
-  // arm the Riccati recursion, alpha does not matter
+  // the Riccati solver's horizon is always fixed: under "auto", on this fully actuated arm the
+  // Riccati recursion, alpha does not matter
   const Result ric = idmpc("swingup --task task.json --solver auto --implicit-damping on --alpha 1 "
                            "--init-full-horizon false --duration 0.05 --summary riccati.json");
   ASSERT_EQ(ric.code, 2) << ric.err;

@@ -246,13 +246,21 @@ TEST(TaskRun, AutoSolverIsChosenOnceAndRecorded) {
 }
 
 // The Riccati solver's start on a fast unstable arm (tests/mujoco/fixtures/fast_open_loop_arm.xml:
-// λ = 30 1/s, R up to 2e6): from its initial guess the KKT residual exceeds 1e8 (the costates
+// λ = 30 1/s, R up to 2e6): at its initial guess the KKT residual exceeds 1e8 (the costates
 // through 25 unstable stages), which is no divergence while the iterates stay bounded; the
-// globalized iterations bring it to about 40 and the loop runs (the whole 6 s reach it makes)
+// globalized iterations bring it to about 40 and the loop runs (its 6 s task reaches, 6e-4 rad)
 TEST(TaskRun, TheRiccatiStartIsNotStoppedByALargeInitialResidual) {
   Task task = load_task(IDMPC_SOURCE_DIR "/tests/mujoco/fixtures/fast_open_loop_arm.json");
   task.formulation = "fd";
   task.duration = 0.01;
+  {
+    // the case: the residual at the initial guess (a start of no iterations)
+    Task guess = task;
+    guess.riccati.init_iterations = 0;
+    mj::TaskRun at_guess(guess);
+    at_guess.controller().initialize(at_guess.settings().q_start, VecX<double>::Zero(at_guess.n()));
+    ASSERT_GT(at_guess.controller().start_residual(), 1e8) << "the case needs a large initial residual";
+  }
   mj::TaskRun run(task);
   ASSERT_EQ(to_string(run.controller().solver_kind()), "riccati");
   ASSERT_GT(run.horizon().open_loop_rate, 20.0) << "the case needs a fast open loop";

@@ -39,9 +39,10 @@ TEST_P(TrackingClosedLoop, ToolPointFollowsItsCircleWithinItsTorqueLimits) {
   Task task = load_task(std::string(IDMPC_SOURCE_DIR "/mjcf/") + file);
   task.formulation = formulation == Formulation::kForwardDynamics ? "fd" : "id";
   task.solver = solver;
-  task.derivatives = "adjoint";
+  task.derivatives = "adjoint";  // (C/GMRES's; the Riccati solver's stage Jacobians are matrices)
   task.duration = kDuration;
   mj::TaskRun run(task);
+  ASSERT_EQ(to_string(run.controller().solver_kind()), solver == "auto" ? "riccati" : solver);
   ASSERT_TRUE(run.frame_target().has_value());
   ASSERT_TRUE(run.reference() != nullptr);
   const VecX<double> lower = run.torque_lower(), upper = run.torque_upper();

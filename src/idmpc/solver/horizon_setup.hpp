@@ -62,9 +62,9 @@
 namespace idmpc {
 
 /// @brief λT_f above which FD's single-shooting rollout is ill-conditioned for C/GMRES (an
-/// amplification e^4.5 ≈ 90 over the horizon): on generated arms, FD's C/GMRES diverged on 5 of the 7
-/// arms above it in each of the two sets of 36 the line was drawn on, and on 1 and 2 of the 29
-/// below it; on a third set, 4 of 6 above and 4 of 30 below.
+/// amplification e^4.5 ≈ 90 over the horizon), said at start where FD runs under C/GMRES: on
+/// generated arms FD's C/GMRES diverges on most arms above it and on few below (results.md,
+/// "Generated arms with the defaults").
 inline constexpr double kIllConditionedGrowth = 4.5;
 
 /// @brief The smallest smoothing velocity of "auto" friction [rad/s or m/s].

@@ -153,7 +153,8 @@ class RiccatiSolver final : public MpcSolver {
   // false (failure_ says why) where the iterates are non-finite or beyond 1e8, or, with
   // bound_residual, the KKT residual is. The start leaves the residual out: from its initial guess
   // on a fast unstable arm the costates, and so the residual, are that large (1e8 on a generated
-  // arm whose open loop grows at 30 1/s) while the globalized iterations bring it down
+  // arm whose open loop grows at 30 1/s) while the globalized iterations bring it down. (C/GMRES's
+  // full-horizon start begins from this start's solution, Cgmres::initialize.)
   bool check_finite(bool bound_residual = true);
 
   OcpProblem problem_;
