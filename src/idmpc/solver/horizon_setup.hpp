@@ -32,13 +32,13 @@
 /// - Solver "auto": the Riccati recursion on a fully actuated model, C/GMRES on an under-actuated
 ///   one; decided on the model, never on the formulation, so that FD and ID are compared under one
 ///   solver. Where C/GMRES holds, the Riccati recursion reaches as well, at a fraction of the cost
-///   per update; where it does not, FD's C/GMRES diverges in ways no quantity of the model
+///   per update; where it does not, FD's C/GMRES diverges in ways no quantity of the model we tried
 ///   predicts (above the open-loop line mostly, below it too: light joints, where a continuation
 ///   step of 10 GMRES iterations cannot follow how fast F moves with the state). On four generated
 ///   reach sets of 36 arms and one of circles the Riccati recursion reached every arm C/GMRES
-///   reached, in both formulations (results.md, "The default solver"). Under-actuated models keep C/GMRES: their target is
-///   unstable by construction (the passive joints'), and C/GMRES swings the cart-pole up in both
-///   formulations.
+///   reached, in both formulations (results.md, "The default solver"). Under-actuated models keep
+///   C/GMRES: their target is unstable by construction (the passive joints'), and C/GMRES swings
+///   the cart-pole up in both formulations.
 /// - The plant model (torque rule, observer) takes the damping implicitly over one plant step, as
 ///   MuJoCo's Euler and implicit integrators do.
 /// - An under-actuated model's terminal cost is the LQR value ½eᵀP e of its fixed joint target
