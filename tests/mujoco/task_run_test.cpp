@@ -227,7 +227,8 @@ TEST(TaskRun, AControllerBuiltFromItsSettingsIsTheOneItRuns) {
 // formulations, and its task and summary record that one, so that the task as run can be run
 // again (not run here: the Python suite runs these tasks)
 TEST(TaskRun, AutoSolverIsChosenOnceAndRecorded) {
-  for (const auto& [file, expected] : {std::pair{"ur5e_reach.json", "riccati"}, std::pair{"cartpole_swingup.json", "cgmres"}}) {
+  for (const auto& [file, expected] :
+       {std::pair{"ur5e_reach.json", "riccati"}, std::pair{"cartpole_swingup.json", "cgmres"}}) {
     const Task task = load_task(std::string(IDMPC_SOURCE_DIR "/mjcf/") + file);
     ASSERT_EQ(task.solver, "auto") << file << ": the case needs the default";
     for (const char* formulation : {"fd", "id"}) {
