@@ -290,7 +290,6 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
   // the open loop of the horizon's dynamics (its damping as the plant has it, not the step's)
   const double lambda = open_loop_rate(with_friction, configurations);
   const bool ill_conditioned = lambda * s.cgmres.Tf > kIllConditionedGrowth;
-  const std::string growth = text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) + " over Tf)";
   SolverKind solver = s.solver;
   if (solver == SolverKind::kAuto) {
     solver = model.under_actuated() ? SolverKind::kCgmres : SolverKind::kRiccati;
@@ -300,8 +299,8 @@ HorizonSetup setup_horizon(const Model& model, const ControllerSettings& s) {
                         : "solver \"auto\": C/GMRES in both formulations (an under-actuated model)");
   }
   if (s.formulation == Formulation::kForwardDynamics && solver == SolverKind::kCgmres && ill_conditioned) {
-    notes.push_back("the open loop diverges at " + growth +
-                    ": FD's single-shooting rollout is ill-conditioned for C/GMRES here; ID's or the Riccati "
+    notes.push_back("the open loop diverges at " + text(lambda) + " 1/s (x" + text(std::exp(lambda * s.cgmres.Tf)) +
+                    " over Tf): FD's single-shooting rollout is ill-conditioned for C/GMRES here; ID's or the Riccati "
                     "solver's is not");
   }
 
